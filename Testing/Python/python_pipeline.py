@@ -1,0 +1,74 @@
+"""The pipeline built in vtkpython from the `repose` package: phantom -> mesher -> weights ->
+skinning -> posed volume and surfaces. Changing the pose re-runs only the posing filters."""
+import json
+import sys
+
+import numpy as np
+from vtkmodules.util.numpy_support import vtk_to_numpy
+
+from repose import (vtkReposeBodyMesher, vtkReposeBoneWeights, vtkReposePhantomSource, vtkReposePosedVolume,
+                    vtkReposeSkinning, vtkReposeSurfaceBinding, vtkReposeSurfaceDeformer,
+                    vtkReposeSurfaceExtractor)
+
+from repose_testing import check
+
+failures = []
+phantom = vtkReposePhantomSource()
+phantom.SetSizeName("tiny")
+phantom.Update()
+skeleton = phantom.GetSkeletonJSON()
+names = [j["name"] for j in json.loads(skeleton)["joints"]]
+
+mesher = vtkReposeBodyMesher()
+mesher.SetInputConnection(phantom.GetOutputPort())
+mesher.SetSkeletonJSON(skeleton)
+weights = vtkReposeBoneWeights()
+weights.SetInputConnection(mesher.GetOutputPort())
+weights.SetSkeletonJSON(skeleton)
+skinning = vtkReposeSkinning()
+skinning.SetInputConnection(weights.GetOutputPort())
+skinning.SetSkeletonJSON(skeleton)
+volume = vtkReposePosedVolume()
+volume.SetInputConnection(0, phantom.GetOutputPort())
+volume.SetInputConnection(1, weights.GetOutputPort())
+volume.SetInputConnection(2, skinning.GetOutputPort())
+volume.SetInterpolationToNearest()
+surfaces = vtkReposeSurfaceExtractor()
+surfaces.SetInputConnection(phantom.GetOutputPort())
+surfaces.SetSkeletonJSON(skeleton)
+binding = vtkReposeSurfaceBinding()
+binding.SetInputConnection(0, surfaces.GetOutputPort())
+binding.SetInputConnection(1, weights.GetOutputPort())
+deformer = vtkReposeSurfaceDeformer()
+deformer.SetInputConnection(0, binding.GetOutputPort())
+deformer.SetInputConnection(1, skinning.GetOutputPort())
+
+skinning.SetPoseJSON(json.dumps({"rotations": {}}))
+volume.Update()
+deformer.Update()
+rest_labels = vtk_to_numpy(phantom.GetOutput().GetPointData().GetScalars())
+identity = vtk_to_numpy(volume.GetOutput().GetPointData().GetScalars())
+mesh = weights.GetOutput()
+check(mesh.GetNumberOfCells() > 1000, f"tet mesh: {mesh.GetNumberOfPoints()} nodes, {mesh.GetNumberOfCells()} tets", failures)
+W = vtk_to_numpy(mesh.GetPointData().GetArray("Weights"))
+check(np.abs(W.sum(1) - 1).max() < 1e-5 and W.min() >= 0, "weights: partition of unity, non-negative", failures)
+ratio = (identity != 0).sum() / (rest_labels != 0).sum()
+check(abs(ratio - 1) < 0.02, f"identity pose keeps the body volume (ratio {ratio:.4f})", failures)
+rest_pts = vtk_to_numpy(deformer.GetOutput().GetPoints().GetData()).copy()
+surf_rest = vtk_to_numpy(surfaces.GetOutput().GetPoints().GetData())
+check(np.abs(rest_pts - surf_rest).max() < 1e-3, "identity pose leaves the surfaces in place", failures)
+
+mesher_time = mesher.GetMTime()
+mesh_out_time = mesher.GetOutput().GetMTime()
+weights_out_time = weights.GetOutput().GetMTime()
+skinning.SetPoseJSON(json.dumps({"rotations": {"left_knee": {"axis": [1, 0, 0], "degrees": 60}}}))
+volume.Update()
+deformer.Update()
+check(mesher.GetOutput().GetMTime() == mesh_out_time and weights.GetOutput().GetMTime() == weights_out_time,
+      "a new pose does not re-run meshing or weights", failures)
+moved = np.linalg.norm(vtk_to_numpy(deformer.GetOutput().GetPoints().GetData()) - rest_pts, axis=1)
+check(moved.max() > 20 and np.median(moved) < 1e-3, f"knee flexion moves part of the surfaces (max {moved.max():.1f} mm)", failures)
+posed = vtk_to_numpy(volume.GetOutput().GetPointData().GetScalars())
+check(volume.GetOutput().GetNumberOfPoints() >= len(rest_labels), "posed grid holds the posed body", failures)
+print(f"{6 - len(failures)} passed, {len(failures)} failed")
+sys.exit(1 if failures else 0)

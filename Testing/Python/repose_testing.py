@@ -1,0 +1,161 @@
+"""Helpers shared by the Python tests: paths, running the CLI, images as numpy arrays, and an
+independent forward-kinematics oracle (so the tests do not check the code with itself)."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+from vtkmodules.util.numpy_support import vtk_to_numpy
+
+EXE = os.environ["REPOSE_EXE"]
+SHARED = os.environ["REPOSE_SHARED_DATA"]
+TESTING = os.environ["REPOSE_TESTING_DIR"]
+TEMP = os.environ["REPOSE_TEMP"]
+TINY = os.path.join(TEMP, "tiny")  # the fixture's working folder
+
+
+def run(*args, check=True):
+    """Runs the repose CLI; returns (exit code, stdout, stderr)."""
+    p = subprocess.run([EXE, *map(str, args)], capture_output=True, text=True)
+    if check and p.returncode != 0:
+        sys.exit(f"repose {' '.join(map(str, args))} failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")
+    return p.returncode, p.stdout, p.stderr
+
+
+class Image:
+    """A volume as a numpy array a[k, j, i] with its grid (origin, spacing, direction)."""
+
+    def __init__(self, path):
+        from repose import vtkReposeImageReader
+        r = vtkReposeImageReader()
+        r.SetFileName(path)
+        r.Update()
+        err = r.GetLastError()
+        if err:
+            raise RuntimeError(err)
+        img = r.GetOutput()
+        self.dims = img.GetDimensions()
+        self.origin = np.array(img.GetOrigin())
+        self.spacing = np.array(img.GetSpacing())
+        m = img.GetDirectionMatrix()
+        self.direction = np.array([[m.GetElement(r_, c) for c in range(3)] for r_ in range(3)])
+        d = self.dims
+        self.a = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(d[2], d[1], d[0]).copy()
+
+    def centres(self):
+        """Physical centres of all voxels, shape (k, j, i, 3)."""
+        k, j, i = np.meshgrid(np.arange(self.dims[2]), np.arange(self.dims[1]), np.arange(self.dims[0]),
+                              indexing="ij")
+        ijk = np.stack([i, j, k], -1).astype(float) * self.spacing
+        return ijk @ self.direction.T + self.origin
+
+    def nearest(self, points, outside=0):
+        """Values at the nearest voxel of physical points (..., 3)."""
+        ijk = np.rint(((points - self.origin) @ self.direction) / self.spacing).astype(np.int64)
+        inside = np.all((ijk >= 0) & (ijk < np.array(self.dims)), axis=-1)
+        out = np.full(points.shape[:-1], outside, dtype=self.a.dtype)
+        c = ijk[inside]
+        out[inside] = self.a[c[:, 2], c[:, 1], c[:, 0]]
+        return out
+
+
+def quat_from_pose_entry(e):
+    if "quaternion" in e:
+        q = np.array(e["quaternion"], float)
+        return q / np.linalg.norm(q)
+    axis = np.array(e["axis"], float)
+    axis /= np.linalg.norm(axis)
+    h = np.radians(e["degrees"]) / 2
+    return np.concatenate([[np.cos(h)], np.sin(h) * axis])
+
+
+def quat_matrix(q):
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def bone_transforms(skeleton, pose):
+    """name -> 4x4 rest-to-posed transform, G_j = G_parent T(c) R T(-c) (DESIGN.md)."""
+    joints = {j["name"]: j for j in skeleton["joints"]}
+    out = {}
+
+    def g(name):
+        if name in out:
+            return out[name]
+        j = joints[name]
+        c = np.array(j["center"], float)
+        local = np.eye(4)
+        if name in pose.get("rotations", {}):
+            R = quat_matrix(quat_from_pose_entry(pose["rotations"][name]))
+            local[:3, :3] = R
+            local[:3, 3] = c - R @ c
+        if j["parent"] is None:
+            t = np.eye(4)
+            t[:3, 3] = pose.get("translation", [0, 0, 0])
+            out[name] = t @ local
+        else:
+            out[name] = g(j["parent"]) @ local
+        return out[name]
+
+    for n in joints:
+        g(n)
+    return out
+
+
+def load_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def dice(a, b):
+    s = a.sum() + b.sum()
+    return 1.0 if s == 0 else 2.0 * np.logical_and(a, b).sum() / s
+
+
+def rigid_bone_dice(rest, posed, labels, G):
+    """Dice between the posed volume's voxels of `labels` and the rest bone moved rigidly by G."""
+    x = posed.centres()
+    back = (x - G[:3, 3]) @ G[:3, :3]  # G^-1 x for a rigid G
+    expected = np.isin(rest.nearest(back), labels)
+    got = np.isin(posed.a, labels)
+    return dice(got, expected)
+
+
+def check(cond, message, failures):
+    print(("ok   " if cond else "FAIL ") + message)
+    if not cond:
+        failures.append(message)
+
+
+def compare_with_baseline(png_path, name, threshold=10.0):
+    """VTK's image comparison of a rendered PNG with Testing/Data/Baseline/<name>.png. A missing
+    baseline copies the candidate to Testing/Temporary and fails (inspect it, then copy it)."""
+    import shutil
+    from vtkmodules.vtkImagingCore import vtkImageDifference
+    from vtkmodules.vtkIOImage import vtkPNGReader
+    baseline = os.path.join(TESTING, "Data", "Baseline", name + ".png")
+    keep = os.path.join(TESTING, "Temporary")
+    os.makedirs(keep, exist_ok=True)
+    if not os.path.isfile(baseline):
+        shutil.copy(png_path, os.path.join(keep, name + ".png"))
+        print(f"no baseline {baseline}; candidate written to {keep}/{name}.png")
+        return False
+    readers = []
+    for p in (png_path, baseline):
+        r = vtkPNGReader()
+        r.SetFileName(p)
+        r.Update()
+        readers.append(r)
+    diff = vtkImageDifference()
+    diff.SetInputConnection(readers[0].GetOutputPort())
+    diff.SetImageConnection(readers[1].GetOutputPort())
+    diff.Update()
+    error = diff.GetThresholdedError()
+    print(f"{name}: thresholded image error {error:.3f} (threshold {threshold})")
+    if error > threshold:
+        shutil.copy(png_path, os.path.join(keep, name + ".png"))
+        return False
+    return True

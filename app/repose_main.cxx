@@ -1,0 +1,363 @@
+// The `repose` command line: demo, phantom, prepare, pose.
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkObject.h>
+#include <vtkOutputWindow.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+
+#include "vtkReposePhantomSource.h"
+
+#include "atomic_outputs.h"
+#include "pose.h"
+#include "render_snapshot.h"
+#include "repose_pipeline.h"
+#include "skeleton.h"
+
+namespace {
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// `--name value` options and `--flag` switches of one command.
+class Options {
+public:
+  Options(int argc, char** argv, int first, const std::set<std::string>& valued, const std::set<std::string>& flags) {
+    for (int i = first; i < argc; ++i) {
+      std::string a = argv[i];
+      if (a == "-h" || a == "--help") {
+        help = true;
+        continue;
+      }
+      if (a.rfind("--", 0) != 0) throw UsageError("unexpected argument '" + a + "'");
+      std::string name = a.substr(2), value;
+      const auto eq = name.find('=');
+      if (eq != std::string::npos) {
+        value = name.substr(eq + 1);
+        name = name.substr(0, eq);
+      }
+      if (flags.count(name)) {
+        values_[name] = "1";
+      } else if (valued.count(name)) {
+        if (eq == std::string::npos) {
+          if (i + 1 >= argc) throw UsageError("option --" + name + " needs a value");
+          value = argv[++i];
+        }
+        values_[name] = value;
+      } else {
+        throw UsageError("unknown option --" + name);
+      }
+    }
+  }
+  bool has(const std::string& n) const { return values_.count(n) != 0; }
+  std::string get(const std::string& n, const std::string& fallback = "") const {
+    auto it = values_.find(n);
+    return it == values_.end() ? fallback : it->second;
+  }
+  std::string require(const std::string& n) const {
+    if (!has(n) || get(n).empty()) throw UsageError("missing required option --" + n);
+    return get(n);
+  }
+  double number(const std::string& n, double fallback) const {
+    if (!has(n)) return fallback;
+    char* end = nullptr;
+    const std::string v = get(n);
+    const double x = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0' || !std::isfinite(x)) throw UsageError("--" + n + " needs a number, not '" + v + "'");
+    return x;
+  }
+  bool help = false;
+
+private:
+  std::map<std::string, std::string> values_;
+};
+
+const char* kMainUsage =
+    "usage: repose COMMAND [OPTIONS]\n"
+    "Repose a segmented CT/MRI scan: tet mesh, harmonic bone weights, skinning, posed volume.\n\n"
+    "commands:\n"
+    "  demo      built-in phantom -> prepare -> pose; writes every output and render.png\n"
+    "  phantom   write the built-in phantom's labels.nii.gz and skeleton.json\n"
+    "  prepare   mesh a label volume, compute bone weights and bind surfaces (once per scan)\n"
+    "  pose      pose a prepared case: posed label volume, mesh and surfaces\n\n"
+    "Run 'repose COMMAND --help' for the options of a command.\n";
+
+const char* kDemoUsage =
+    "usage: repose demo [--out DIR] [--size tiny|small|medium|large] [--skinning dqs|lbs] [--no-render]\n"
+    "  Builds the phantom, prepares it and poses it (left hip flexed 60 deg, left knee 45 deg,\n"
+    "  right shoulder abducted 80 deg, right elbow 90 deg). Writes into DIR (default ./repose-demo):\n"
+    "  rest_labels.nii.gz, skeleton.json, pose.json, case/, posed_labels.nii.gz, posed_mesh.vtu,\n"
+    "  posed_surfaces.vtp, rest_surfaces.vtp and render.png, and prints the time of each stage.\n"
+    "  --size       phantom size (default small)\n"
+    "  --no-render  skip render.png (it needs an X display; without one, repose runs itself under xvfb-run)\n";
+
+const char* kPhantomUsage =
+    "usage: repose phantom --out DIR [--size tiny|small|medium|large]\n"
+    "  Writes DIR/labels.nii.gz, DIR/skeleton.json and DIR/labels.tsv (label table).\n";
+
+const char* kPrepareUsage =
+    "usage: repose prepare --labels FILE --skeleton FILE [--image CT_FILE] --out CASE_DIR [options]\n"
+    "  Meshes the body with TetGen, solves Laplace's equation for the bone weights and binds the skin\n"
+    "  and bone surfaces to the mesh. CASE_DIR then holds mesh.vtu, surfaces.vtp, skeleton.json,\n"
+    "  labels.<ext> and manifest.json (ParaView opens the .vtu/.vtp as they are).\n"
+    "  --image FILE            CT on the label grid: the body is the labels united with CT above the threshold\n"
+    "  --body-threshold HU     default -500\n"
+    "  --mesh-spacing MM       mesh the body on this voxel size (default: the label spacing); coarser = fewer tets\n"
+    "  --quality RATIO         TetGen radius-edge bound (default 1.6)\n"
+    "  --influences K          bone weights kept per node (default 4)\n"
+    "  --surface-reduction F   fraction of surface triangles removed by decimation (default 0)\n";
+
+const char* kPoseUsage =
+    "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
+    "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
+    "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
+    "  volume's format; default: the format of the case's labels.\n";
+
+void printTimings(const repose::Pipeline& pipeline, std::size_t from = 0) {
+  const auto& t = pipeline.timings();
+  for (std::size_t i = from; i < t.size(); ++i)
+    std::cout << "  " << std::left << std::setw(16) << t[i].stage << std::right << std::fixed
+              << std::setprecision(3) << std::setw(9) << t[i].seconds << " s\n";
+  std::cout.unsetf(std::ios::floatfield);
+}
+
+std::vector<int> boneLabels(const std::string& skeletonJson) {
+  std::vector<int> labels;
+  for (const auto& j : repose::parseSkeletonJson(skeletonJson).joints)
+    labels.insert(labels.end(), j.labels.begin(), j.labels.end());
+  return labels;
+}
+
+std::string normalizedFormat(std::string ext) {
+  if (!ext.empty() && ext[0] != '.') ext = "." + ext;
+  for (const char* known : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd"})
+    if (ext == known) return ext;
+  throw UsageError("unknown image format '" + ext + "' (use .nii.gz, .nii, .nrrd, .nhdr, .mha or .mhd)");
+}
+
+/// The demo's pose: a hip flexed 60 deg, a knee 45 deg, a shoulder abducted 80 deg, an elbow 90 deg.
+/// LPS frame: +x patient left, +y posterior, +z superior.
+const char* kDemoPose = R"({
+  "rotations": {
+    "left_hip":       {"axis": [1, 0, 0], "degrees": -60},
+    "left_knee":      {"axis": [1, 0, 0], "degrees": 45},
+    "right_shoulder": {"axis": [0, 1, 0], "degrees": 80},
+    "right_elbow":    {"axis": [1, 0, 0], "degrees": -90}
+  },
+  "translation": [0, 0, 0]
+}
+)";
+
+vtkSmartPointer<vtkReposePhantomSource> makePhantom(const std::string& size) {
+  auto phantom = vtkSmartPointer<vtkReposePhantomSource>::New();
+  if (size != "tiny" && size != "small" && size != "medium" && size != "large")
+    throw UsageError("unknown --size '" + size + "' (use tiny, small, medium or large)");
+  phantom->SetSizeName(size.c_str());
+  phantom->Update();
+  if (!phantom->GetOutput() || !phantom->GetOutput()->GetPointData())
+    throw std::runtime_error("phantom: cannot build the phantom");
+  return phantom;
+}
+
+int runPhantom(const Options& o) {
+  if (o.help) return std::cout << kPhantomUsage, 0;
+  const std::string outDir = o.require("out");
+  auto phantom = makePhantom(o.get("size", "small"));
+  repose::AtomicOutputs out(outDir);
+  repose::writeImage(phantom->GetOutput(), out.stage("labels.nii.gz"));
+  repose::writeTextFile(out.stage("skeleton.json"), phantom->GetSkeletonJSON());
+  repose::writeTextFile(out.stage("labels.tsv"), phantom->GetLabelTableTSV());
+  out.commit();
+  int d[3];
+  phantom->GetOutput()->GetDimensions(d);
+  std::cout << "phantom: " << d[0] << "x" << d[1] << "x" << d[2] << " voxels written to " << outDir << "\n";
+  return 0;
+}
+
+void prepareCase(repose::Pipeline& pipeline, vtkImageData* labels, const std::string& labelsName,
+                 const std::string& skeletonJson, const std::string& skeletonName, vtkImageData* image,
+                 const Options& o, const std::string& caseDir, const std::string& labelsExt) {
+  repose::PrepareSettings s;
+  s.bodyThreshold = o.number("body-threshold", s.bodyThreshold);
+  s.meshSpacing = o.number("mesh-spacing", s.meshSpacing);
+  s.radiusEdgeRatio = o.number("quality", s.radiusEdgeRatio);
+  s.maxInfluences = static_cast<int>(o.number("influences", s.maxInfluences));
+  s.surfaceReduction = o.number("surface-reduction", s.surfaceReduction);
+  if (s.maxInfluences < 1 || s.maxInfluences > 16) throw UsageError("--influences must be between 1 and 16");
+  if (s.meshSpacing < 0) throw UsageError("--mesh-spacing must not be negative");
+  if (s.radiusEdgeRatio < 1.1) throw UsageError("--quality must be at least 1.1 (TetGen does not terminate below)");
+  if (s.surfaceReduction < 0 || s.surfaceReduction >= 1) throw UsageError("--surface-reduction must be in [0, 1)");
+  pipeline.prepare(labels, labelsName, skeletonJson, skeletonName, image, s);
+  pipeline.saveCase(caseDir, labelsExt);
+  for (const auto& line : pipeline.reportLines()) std::cout << "  " << line << "\n";
+}
+
+int runPrepare(const Options& o) {
+  if (o.help) return std::cout << kPrepareUsage, 0;
+  const std::string labelsPath = o.require("labels");
+  const std::string skeletonPath = o.require("skeleton");
+  const std::string caseDir = o.require("out");
+  repose::Pipeline pipeline;
+  pipeline.setProgress([](const std::string& s) { std::cout << "prepare: " << s << "..." << std::endl; });
+  auto labels = repose::readLabelVolume(labelsPath);
+  const std::string skeletonJson = repose::readTextFile(skeletonPath);
+  vtkSmartPointer<vtkImageData> image;
+  if (o.has("image")) image = repose::readIntensityImage(o.get("image"));
+  std::string ext = repose::imageExtension(labelsPath);
+  if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha") ext = ".nii.gz";
+  prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath, image, o, caseDir, ext);
+  std::cout << "prepared case written to " << caseDir << "\n";
+  printTimings(pipeline);
+  return 0;
+}
+
+/// Poses a loaded pipeline and writes the posed outputs into `out`.
+void writePosed(repose::Pipeline& pipeline, repose::AtomicOutputs& out, const std::string& labelsExt,
+                const std::string& imageExt) {
+  repose::writeMesh(pipeline.posedMesh(), out.stage("posed_mesh.vtu"));
+  repose::writeSurfaces(pipeline.posedSurfaces(), out.stage("posed_surfaces.vtp"));
+  repose::writeImage(pipeline.posedLabels(), out.stage("posed_labels" + labelsExt));
+  if (vtkImageData* image = pipeline.posedImage()) repose::writeImage(image, out.stage("posed_image" + imageExt));
+}
+
+int runPose(const Options& o) {
+  if (o.help) return std::cout << kPoseUsage, 0;
+  const std::string caseDir = o.require("case");
+  const std::string posePath = o.require("pose");
+  const std::string outDir = o.require("out");
+  repose::Pipeline pipeline;
+  pipeline.loadCase(caseDir);
+  pipeline.setPose(repose::readTextFile(posePath), posePath);
+  pipeline.setSkinningMethod(o.get("skinning", "dqs"));
+  std::string imageExt = ".nii.gz";
+  if (o.has("image")) {
+    const std::string imagePath = o.get("image");
+    pipeline.setRestImage(repose::readIntensityImage(imagePath), imagePath);
+    imageExt = repose::imageExtension(imagePath);
+  }
+  const std::string labelsExt = o.has("format") ? normalizedFormat(o.get("format")) : pipeline.labelsExtension();
+  repose::AtomicOutputs out(outDir);
+  writePosed(pipeline, out, labelsExt, imageExt);
+  out.commit();
+  std::cout << "posed outputs written to " << outDir << "\n";
+  printTimings(pipeline);
+  return 0;
+}
+
+/// Rendering needs an X display; without one, run again under xvfb-run when it is installed.
+bool reexecUnderXvfb(int argc, char** argv) {
+  if (std::getenv("DISPLAY") || std::getenv("REPOSE_UNDER_XVFB")) return false;
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) return false;
+  setenv("REPOSE_UNDER_XVFB", "1", 1);
+  std::vector<char*> args;
+  args.push_back(const_cast<char*>("xvfb-run"));
+  args.push_back(const_cast<char*>("-a"));
+  for (int i = 0; i < argc; ++i) args.push_back(argv[i]);
+  args.push_back(nullptr);
+  std::cout.flush();
+  execvp("xvfb-run", args.data());
+  return false;
+}
+
+int runDemo(const Options& o, int argc, char** argv) {
+  if (o.help) return std::cout << kDemoUsage, 0;
+  const bool render = !o.has("no-render");
+  if (render && !std::getenv("DISPLAY") && !std::getenv("REPOSE_UNDER_XVFB")) {
+    reexecUnderXvfb(argc, argv);
+    throw std::runtime_error("render.png needs an X display: install xvfb (xvfb-run) or pass --no-render");
+  }
+  const std::string outDir = o.get("out", "repose-demo");
+  const std::string size = o.get("size", "small");
+  repose::Pipeline pipeline;
+  pipeline.setProgress([](const std::string& s) { std::cout << "demo: " << s << "..." << std::endl; });
+
+  std::cout << "demo: building the " << size << " phantom..." << std::endl;
+  auto phantom = makePhantom(size);
+  vtkImageData* labels = phantom->GetOutput();
+  const std::string skeletonJson = phantom->GetSkeletonJSON();
+
+  repose::AtomicOutputs out(outDir);
+  repose::writeImage(labels, out.stage("rest_labels.nii.gz"));
+  repose::writeTextFile(out.stage("skeleton.json"), skeletonJson);
+  repose::writeTextFile(out.stage("pose.json"), kDemoPose);
+  repose::writeTextFile(out.stage("labels.tsv"), phantom->GetLabelTableTSV());
+  prepareCase(pipeline, labels, "phantom", skeletonJson, "phantom skeleton", nullptr, o, out.stage("case"), ".nii.gz");
+
+  pipeline.setPose(kDemoPose, "demo pose");
+  pipeline.setSkinningMethod(o.get("skinning", "dqs"));
+  std::cout << "demo: posing..." << std::endl;
+  writePosed(pipeline, out, ".nii.gz", ".nii.gz");
+  repose::writeSurfaces(pipeline.restSurfaces(), out.stage("rest_surfaces.vtp"));
+  if (render) {
+    std::cout << "demo: rendering..." << std::endl;
+    repose::renderSideBySide(pipeline.restSurfaces(), pipeline.posedSurfaces(), boneLabels(skeletonJson),
+                             out.stage("render.png"));
+  }
+  out.commit();
+  int d[3];
+  labels->GetDimensions(d);
+  std::cout << "demo: " << d[0] << "x" << d[1] << "x" << d[2] << " voxels, "
+            << pipeline.restMesh()->GetNumberOfPoints() << " nodes, " << pipeline.restMesh()->GetNumberOfCells()
+            << " tets; outputs in " << outDir << "\nstage times:\n";
+  printTimings(pipeline);
+  return 0;
+}
+
+/// VTK's warnings and errors go to stderr as single lines; failures are reported by the caller.
+class QuietOutputWindow : public vtkOutputWindow {
+public:
+  static QuietOutputWindow* New() { return new QuietOutputWindow; }
+  void DisplayText(const char* text) override {
+    if (std::getenv("REPOSE_VERBOSE")) std::cerr << text;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  vtkNew<QuietOutputWindow> quiet;
+  vtkOutputWindow::SetInstance(quiet);
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+    std::cout << kMainUsage;
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string command = argv[1];
+  try {
+    const std::set<std::string> none;
+    if (command == "demo")
+      return runDemo(Options(argc, argv, 2, {"out", "size", "skinning"}, {"no-render"}), argc, argv);
+    if (command == "phantom") return runPhantom(Options(argc, argv, 2, {"out", "size"}, none));
+    if (command == "prepare")
+      return runPrepare(Options(argc, argv, 2,
+                                {"labels", "skeleton", "image", "out", "body-threshold", "mesh-spacing", "quality",
+                                 "influences", "surface-reduction"},
+                                none));
+    if (command == "pose")
+      return runPose(Options(argc, argv, 2, {"case", "pose", "out", "skinning", "image", "format"}, none));
+    throw UsageError("unknown command '" + command + "' (see repose --help)");
+  } catch (const UsageError& e) {
+    std::cerr << "repose: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::string msg = e.what();
+    for (char& c : msg)
+      if (c == '\n') c = ' ';
+    std::cerr << "repose: error: " << msg << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,473 @@
+#include "repose_pipeline.h"
+
+#include <chrono>
+#include <cmath>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <json/json.h>
+
+#include <vtkAlgorithm.h>
+#include <vtkCommand.h>
+#include <vtkDataArray.h>
+#include <vtkExecutive.h>
+#include <vtkImageData.h>
+#include <vtkIntArray.h>
+#include <vtkMatrix3x3.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLPolyDataWriter.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include "vtkReposeBodyMesher.h"
+#include "vtkReposeBoneWeights.h"
+#include "vtkReposeImageReader.h"
+#include "vtkReposeImageWriter.h"
+#include "vtkReposePosedVolume.h"
+#include "vtkReposeSkinning.h"
+#include "vtkReposeSurfaceBinding.h"
+#include "vtkReposeSurfaceDeformer.h"
+#include "vtkReposeSurfaceExtractor.h"
+
+#include "atomic_outputs.h"
+#include "pose.h"
+#include "skeleton.h"
+
+namespace repose {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+vtkSmartPointer<vtkImageData> readImageFile(const std::string& path) {
+  if (!fileExists(path)) throw std::runtime_error(path + ": no such file");
+  auto reader = vtkSmartPointer<vtkReposeImageReader>::New();
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  if (reader->GetLastError() && *reader->GetLastError())
+    throw std::runtime_error(reader->GetLastError());
+  vtkImageData* out = reader->GetOutput();
+  if (!out || !out->GetPointData()->GetScalars())
+    throw std::runtime_error(path + ": cannot read image");
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  image->ShallowCopy(out);
+  return image;
+}
+
+/// Records the last error a VTK filter reported through vtkErrorMacro (the core's message), so it
+/// can be shown to the user as one line instead of VTK's multi-line console text.
+class ErrorCapture : public vtkCommand {
+public:
+  static ErrorCapture* New() { return new ErrorCapture; }
+  void Execute(vtkObject*, unsigned long, void* callData) override {
+    std::string text = callData ? static_cast<const char*>(callData) : "";
+    const auto pos = text.find("): ");
+    if (pos != std::string::npos) text = text.substr(pos + 3);
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    for (char& c : text)
+      if (c == '\n') c = ' ';
+    last = text;
+  }
+  std::string last;
+};
+
+vtkSmartPointer<ErrorCapture> captureErrors(vtkAlgorithm* filter) {
+  auto capture = vtkSmartPointer<ErrorCapture>::New();
+  filter->AddObserver(vtkCommand::ErrorEvent, capture);
+  return capture;
+}
+
+/// Runs a filter; throws with the filter's own error message when it fails.
+void updateOrThrow(vtkAlgorithm* filter, const std::string& what) {
+  auto capture = vtkSmartPointer<ErrorCapture>::New();
+  const unsigned long tag = filter->AddObserver(vtkCommand::ErrorEvent, capture);
+  const int ok = filter->GetExecutive()->Update();
+  filter->RemoveObserver(tag);
+  if (!ok || !capture->last.empty())
+    throw std::runtime_error(what + " failed" + (capture->last.empty() ? std::string() : ": " + capture->last));
+}
+
+/// Checks a filter ran; the filters report core errors through vtkErrorMacro and an empty output.
+void requireOutput(bool ok, const std::string& what, const ErrorCapture* errors) {
+  if (!ok)
+    throw std::runtime_error(what + " failed" + (errors && !errors->last.empty() ? ": " + errors->last : std::string()));
+}
+
+std::string describeGrid(vtkImageData* image) {
+  int d[3];
+  double o[3], s[3];
+  image->GetDimensions(d);
+  image->GetOrigin(o);
+  image->GetSpacing(s);
+  std::ostringstream m;
+  m << d[0] << "x" << d[1] << "x" << d[2] << " voxels of " << s[0] << "x" << s[1] << "x" << s[2]
+    << " mm at (" << o[0] << ", " << o[1] << ", " << o[2] << ")";
+  return m.str();
+}
+
+}  // namespace
+
+vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
+  vtkSmartPointer<vtkImageData> image = readImageFile(path);
+  vtkDataArray* scalars = image->GetPointData()->GetScalars();
+  if (scalars->GetNumberOfComponents() != 1)
+    throw std::runtime_error(path + ": label volume must have one component per voxel, not " +
+                             std::to_string(scalars->GetNumberOfComponents()));
+  if (scalars->GetDataType() != VTK_INT) {
+    // Float files holding whole numbers are common for label maps; anything else is not a label map.
+    const vtkIdType n = scalars->GetNumberOfTuples();
+    auto labels = vtkSmartPointer<vtkIntArray>::New();
+    labels->SetName("Labels");
+    labels->SetNumberOfTuples(n);
+    for (vtkIdType i = 0; i < n; ++i) {
+      const double v = scalars->GetTuple1(i);
+      if (!std::isfinite(v) || v != std::floor(v) || std::fabs(v) > 2147483647.0)
+        throw std::runtime_error(path + ": not a label volume (voxel value " + std::to_string(v) +
+                                 " is not an integer)");
+      labels->SetValue(i, static_cast<int>(v));
+    }
+    image->GetPointData()->SetScalars(labels);
+  }
+  vtkIntArray* labels = vtkIntArray::SafeDownCast(image->GetPointData()->GetScalars());
+  labels->SetName("Labels");
+  bool any = false;
+  for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n && !any; ++i) any = labels->GetValue(i) != 0;
+  if (!any) throw std::runtime_error(path + ": empty label volume (every voxel is 0)");
+  return image;
+}
+
+vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path) {
+  vtkSmartPointer<vtkImageData> image = readImageFile(path);
+  if (image->GetPointData()->GetScalars()->GetNumberOfComponents() != 1)
+    throw std::runtime_error(path + ": image must have one component per voxel");
+  return image;
+}
+
+void writeImage(vtkImageData* image, const std::string& path) {
+  auto writer = vtkSmartPointer<vtkReposeImageWriter>::New();
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(image);
+  if (!writer->Write()) {
+    const char* err = writer->GetLastError();
+    throw std::runtime_error(err && *err ? std::string(err) : path + ": cannot write image");
+  }
+}
+
+void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path) {
+  auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(mesh);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  if (!writer->Write()) throw std::runtime_error(path + ": cannot write mesh");
+}
+
+void writeSurfaces(vtkPolyData* surfaces, const std::string& path) {
+  auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(surfaces);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  if (!writer->Write()) throw std::runtime_error(path + ": cannot write surfaces");
+}
+
+void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
+                   const std::string& imageName) {
+  int dl[3], di[3];
+  double ol[3], oi[3], sl[3], si[3];
+  labels->GetDimensions(dl);
+  image->GetDimensions(di);
+  labels->GetOrigin(ol);
+  image->GetOrigin(oi);
+  labels->GetSpacing(sl);
+  image->GetSpacing(si);
+  bool same = dl[0] == di[0] && dl[1] == di[1] && dl[2] == di[2];
+  for (int a = 0; a < 3 && same; ++a)
+    same = std::fabs(ol[a] - oi[a]) <= 1e-4 * std::max(1.0, std::fabs(sl[a])) &&
+           std::fabs(sl[a] - si[a]) <= 1e-6 * std::fabs(sl[a]);
+  for (int r = 0; r < 3 && same; ++r)
+    for (int c = 0; c < 3 && same; ++c)
+      same = std::fabs(labels->GetDirectionMatrix()->GetElement(r, c) -
+                       image->GetDirectionMatrix()->GetElement(r, c)) <= 1e-6;
+  if (!same)
+    throw std::runtime_error(imageName + " and " + labelsName + " are on different grids (" +
+                             describeGrid(image) + " vs " + describeGrid(labels) + ")");
+}
+
+Pipeline::Pipeline() = default;
+Pipeline::~Pipeline() = default;
+
+void Pipeline::note(const std::string& stage) {
+  if (progress_) progress_(stage);
+}
+
+void Pipeline::timed(const std::string& stage, double seconds) { timings_.push_back({stage, seconds}); }
+
+void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, const std::string& skeletonJson,
+                       const std::string& skeletonName, vtkImageData* image, const PrepareSettings& settings) {
+  Skeleton skeleton;
+  try {
+    skeleton = parseSkeletonJson(skeletonJson);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(skeletonName + ": " + e.what());
+  }
+  if (skeleton.joints.empty()) throw std::runtime_error(skeletonName + ": skeleton has no joints");
+  if (image) checkSameGrid(labels, labelsName, image, "image");
+
+  // Every bone label must be present: a bone without voxels cannot carry weights.
+  std::set<int> present;
+  vtkIntArray* values = vtkIntArray::SafeDownCast(labels->GetPointData()->GetScalars());
+  if (!values) throw std::runtime_error(labelsName + ": label volume must hold integers");
+  for (vtkIdType i = 0, n = values->GetNumberOfTuples(); i < n; ++i) present.insert(values->GetValue(i));
+  for (const Joint& joint : skeleton.joints) {
+    if (joint.labels.empty())
+      throw std::runtime_error(skeletonName + ": joint '" + joint.name + "' lists no labels (its bone has no voxels)");
+    for (int label : joint.labels)
+      if (!present.count(label))
+        throw std::runtime_error(skeletonName + ": joint '" + joint.name + "' names label " +
+                                 std::to_string(label) + ", which " + labelsName + " does not contain");
+  }
+
+  restLabels_ = labels;
+  restImage_ = nullptr;
+  skeletonJson_ = skeletonToJson(skeleton);
+  report_.clear();
+
+  note("meshing the body (TetGen)");
+  auto t0 = Clock::now();
+  auto mesher = vtkSmartPointer<vtkReposeBodyMesher>::New();
+  mesher->SetInputData(0, labels);
+  if (image) mesher->SetInputData(1, image);
+  mesher->SetSkeletonJSON(skeletonJson_.c_str());
+  mesher->SetBodyThreshold(settings.bodyThreshold);
+  mesher->SetMeshingSpacing(settings.meshSpacing);
+  mesher->SetRadiusEdgeRatio(settings.radiusEdgeRatio);
+  auto mesherErrors = captureErrors(mesher);
+  mesher->Update();
+  vtkUnstructuredGrid* mesh = mesher->GetOutput();
+  requireOutput(mesh && mesh->GetNumberOfCells() > 0, "meshing " + labelsName, mesherErrors);
+  timed("mesh", secondsSince(t0));
+  report_.push_back("tet mesh: " + std::to_string(mesh->GetNumberOfPoints()) + " nodes, " +
+                    std::to_string(mesh->GetNumberOfCells()) + " tets");
+
+  note("computing bone weights (Laplace, one factorization)");
+  t0 = Clock::now();
+  auto weights = vtkSmartPointer<vtkReposeBoneWeights>::New();
+  weights->SetInputData(mesh);
+  weights->SetSkeletonJSON(skeletonJson_.c_str());
+  weights->SetMaxInfluences(settings.maxInfluences);
+  auto weightErrors = captureErrors(weights);
+  weights->Update();
+  vtkUnstructuredGrid* weighted = weights->GetOutput();
+  requireOutput(weighted && weighted->GetPointData()->GetArray("Weights"), "bone weights", weightErrors);
+  timed("weights", secondsSince(t0));
+  {
+    std::ostringstream m;
+    m << "weights: min raw " << weights->GetMinimumRawWeight() << ", max raw " << weights->GetMaximumRawWeight()
+      << ", max |sum-1| " << weights->GetMaximumSumError();
+    report_.push_back(m.str());
+  }
+  restMesh_ = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  restMesh_->ShallowCopy(weighted);
+
+  note("extracting skin and bone surfaces");
+  t0 = Clock::now();
+  auto extractor = vtkSmartPointer<vtkReposeSurfaceExtractor>::New();
+  extractor->SetInputData(0, labels);
+  if (image) extractor->SetInputData(1, image);
+  extractor->SetSkeletonJSON(skeletonJson_.c_str());
+  extractor->SetBodyThreshold(settings.bodyThreshold);
+  extractor->SetTargetReduction(settings.surfaceReduction);
+  auto extractorErrors = captureErrors(extractor);
+  extractor->Update();
+  requireOutput(extractor->GetOutput()->GetNumberOfPoints() > 0, "surface extraction", extractorErrors);
+  timed("surfaces", secondsSince(t0));
+
+  note("binding surfaces to the tet mesh");
+  t0 = Clock::now();
+  auto binding = vtkSmartPointer<vtkReposeSurfaceBinding>::New();
+  binding->SetInputConnection(0, extractor->GetOutputPort());
+  binding->SetInputData(1, restMesh_);
+  auto bindingErrors = captureErrors(binding);
+  binding->Update();
+  requireOutput(binding->GetOutput()->GetPointData()->GetArray("BoundTet") != nullptr, "surface binding",
+                bindingErrors);
+  restSurfaces_ = vtkSmartPointer<vtkPolyData>::New();
+  restSurfaces_->ShallowCopy(binding->GetOutput());
+  timed("binding", secondsSince(t0));
+  report_.push_back("surfaces: " + std::to_string(restSurfaces_->GetNumberOfPoints()) + " vertices, " +
+                    std::to_string(restSurfaces_->GetNumberOfCells()) + " triangles, " +
+                    std::to_string(binding->GetOutsideCount()) + " vertices outside the tet mesh");
+  connectPosing();
+}
+
+void Pipeline::saveCase(const std::string& caseDir, const std::string& labelsExtension) const {
+  if (!restMesh_) throw std::runtime_error("nothing to save: the case is not prepared");
+  AtomicOutputs out(caseDir);
+  writeMesh(restMesh_, out.stage("mesh.vtu"));
+  writeSurfaces(restSurfaces_, out.stage("surfaces.vtp"));
+  writeTextFile(out.stage("skeleton.json"), skeletonJson_);
+  writeImage(restLabels_, out.stage("labels" + labelsExtension));
+
+  Json::Value manifest;
+  manifest["format"] = "repose-case";
+  manifest["version"] = 1;
+  manifest["mesh"] = "mesh.vtu";
+  manifest["surfaces"] = "surfaces.vtp";
+  manifest["skeleton"] = "skeleton.json";
+  manifest["labels"] = "labels" + labelsExtension;
+  manifest["nodes"] = Json::Int64(restMesh_->GetNumberOfPoints());
+  manifest["tets"] = Json::Int64(restMesh_->GetNumberOfCells());
+  for (const auto& line : report_) manifest["report"].append(line);
+  for (const auto& t : timings_) manifest["seconds"][t.stage] = t.seconds;
+  Json::StreamWriterBuilder builder;
+  builder["indentation"] = "  ";
+  writeTextFile(out.stage("manifest.json"), Json::writeString(builder, manifest) + "\n");
+  out.commit();
+}
+
+void Pipeline::loadCase(const std::string& caseDir) {
+  const std::string manifestPath = caseDir + "/manifest.json";
+  if (!fileExists(caseDir)) throw std::runtime_error(caseDir + ": no such case directory");
+  if (!fileExists(manifestPath))
+    throw std::runtime_error(caseDir + ": not a prepared case (no manifest.json; run 'repose prepare')");
+  Json::Value manifest;
+  {
+    Json::CharReaderBuilder builder;
+    std::string errors;
+    std::istringstream in(readTextFile(manifestPath));
+    if (!Json::parseFromStream(builder, in, &manifest, &errors) || !manifest.isObject() ||
+        manifest["format"].asString() != "repose-case")
+      throw std::runtime_error(manifestPath + ": not a Repose case manifest");
+  }
+  const std::string meshPath = caseDir + "/" + manifest["mesh"].asString();
+  const std::string surfacesPath = caseDir + "/" + manifest["surfaces"].asString();
+  const std::string skeletonPath = caseDir + "/" + manifest["skeleton"].asString();
+  const std::string labelsPath = caseDir + "/" + manifest["labels"].asString();
+  for (const auto& p : {meshPath, surfacesPath, skeletonPath, labelsPath})
+    if (!fileExists(p)) throw std::runtime_error(p + ": missing from the case directory");
+
+  auto t0 = Clock::now();
+  auto meshReader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  meshReader->SetFileName(meshPath.c_str());
+  meshReader->Update();
+  vtkUnstructuredGrid* mesh = meshReader->GetOutput();
+  if (!mesh || mesh->GetNumberOfCells() == 0 || !mesh->GetPointData()->GetArray("Weights") ||
+      !mesh->GetPointData()->GetArray("BoneIds") || !mesh->GetPointData()->GetArray("FixedBone"))
+    throw std::runtime_error(meshPath + ": not a weighted tet mesh (needs point data Weights, BoneIds, FixedBone)");
+  restMesh_ = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  restMesh_->ShallowCopy(mesh);
+
+  auto surfReader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+  surfReader->SetFileName(surfacesPath.c_str());
+  surfReader->Update();
+  if (!surfReader->GetOutput() || !surfReader->GetOutput()->GetPointData()->GetArray("BoundTet"))
+    throw std::runtime_error(surfacesPath + ": not bound surfaces (needs point data BoundTet, BoundWeights)");
+  restSurfaces_ = vtkSmartPointer<vtkPolyData>::New();
+  restSurfaces_->ShallowCopy(surfReader->GetOutput());
+
+  try {
+    skeletonJson_ = skeletonToJson(parseSkeletonJson(readTextFile(skeletonPath)));
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(skeletonPath + ": " + e.what());
+  }
+  restLabels_ = readLabelVolume(labelsPath);
+  labelsExtension_ = imageExtension(labelsPath);
+  timed("load case", secondsSince(t0));
+  connectPosing();
+}
+
+void Pipeline::connectPosing() {
+  skinning_ = vtkSmartPointer<vtkReposeSkinning>::New();
+  skinning_->SetInputData(restMesh_);
+  skinning_->SetSkeletonJSON(skeletonJson_.c_str());
+  skinning_->SetPoseJSON("{\"rotations\": {}}");
+
+  deformer_ = vtkSmartPointer<vtkReposeSurfaceDeformer>::New();
+  deformer_->SetInputData(0, restSurfaces_);
+  deformer_->SetInputConnection(1, skinning_->GetOutputPort());
+
+  labelResampler_ = vtkSmartPointer<vtkReposePosedVolume>::New();
+  labelResampler_->SetInputData(0, restLabels_);
+  labelResampler_->SetInputData(1, restMesh_);
+  labelResampler_->SetInputConnection(2, skinning_->GetOutputPort());
+  labelResampler_->SetInterpolationToNearest();
+  labelResampler_->SetBackgroundValue(0);
+  imageResampler_ = nullptr;
+}
+
+void Pipeline::setPose(const std::string& poseJson, const std::string& poseName) {
+  if (!skinning_) throw std::runtime_error("no case loaded");
+  try {
+    const Pose pose = parsePoseJson(poseJson);
+    validatePose(pose, parseSkeletonJson(skeletonJson_));
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(poseName + ": " + e.what());
+  }
+  skinning_->SetPoseJSON(poseJson.c_str());
+}
+
+void Pipeline::setSkinningMethod(const std::string& method) {
+  if (!skinning_) throw std::runtime_error("no case loaded");
+  if (method == "dqs")
+    skinning_->SetSkinningMethodToDualQuaternion();
+  else if (method == "lbs")
+    skinning_->SetSkinningMethodToLinearBlend();
+  else
+    throw std::runtime_error("unknown skinning method '" + method + "' (use dqs or lbs)");
+}
+
+void Pipeline::setRestImage(vtkImageData* image, const std::string& imageName) {
+  if (!restLabels_) throw std::runtime_error("no case loaded");
+  checkSameGrid(restLabels_, "the case's label volume", image, imageName);
+  restImage_ = image;
+  imageResampler_ = vtkSmartPointer<vtkReposePosedVolume>::New();
+  imageResampler_->SetInputData(0, restImage_);
+  imageResampler_->SetInputData(1, restMesh_);
+  imageResampler_->SetInputConnection(2, skinning_->GetOutputPort());
+  imageResampler_->SetInterpolationToLinear();
+  // Air outside the body.
+  double range[2];
+  image->GetPointData()->GetScalars()->GetRange(range);
+  imageResampler_->SetBackgroundValue(range[0]);
+}
+
+vtkUnstructuredGrid* Pipeline::posedMesh() {
+  auto t0 = Clock::now();
+  updateOrThrow(skinning_, "skinning");
+  timed("skinning", secondsSince(t0));
+  return skinning_->GetOutput();
+}
+
+vtkPolyData* Pipeline::posedSurfaces() {
+  posedMesh();
+  auto t0 = Clock::now();
+  updateOrThrow(deformer_, "posed surfaces");
+  timed("posed surfaces", secondsSince(t0));
+  return deformer_->GetOutput();
+}
+
+vtkImageData* Pipeline::posedLabels() {
+  posedMesh();
+  auto t0 = Clock::now();
+  updateOrThrow(labelResampler_, "posed label volume");
+  timed("posed labels", secondsSince(t0));
+  return labelResampler_->GetOutput();
+}
+
+vtkImageData* Pipeline::posedImage() {
+  if (!imageResampler_) return nullptr;
+  posedMesh();
+  auto t0 = Clock::now();
+  updateOrThrow(imageResampler_, "posed image");
+  timed("posed image", secondsSince(t0));
+  return imageResampler_->GetOutput();
+}
+
+}  // namespace repose

@@ -1,0 +1,108 @@
+#pragma once
+// The Repose pipeline as one object, shared by the CLI and the GUI (no Qt here, so it is testable
+// headless). Preprocessing (mesh, weights, surfaces, binding) runs once and is saved as a case
+// directory; posing re-runs only skinning, surface deformation and resampling.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <vtkSmartPointer.h>
+
+class vtkImageData;
+class vtkPolyData;
+class vtkUnstructuredGrid;
+class vtkReposeBodyMesher;
+class vtkReposeBoneWeights;
+class vtkReposeSurfaceExtractor;
+class vtkReposeSurfaceBinding;
+class vtkReposeSkinning;
+class vtkReposeSurfaceDeformer;
+class vtkReposePosedVolume;
+
+namespace repose {
+
+struct PrepareSettings {
+  double bodyThreshold = -500.0;   ///< HU, with a CT image
+  double meshSpacing = 0.0;        ///< mm; 0 = the label volume's spacing
+  double radiusEdgeRatio = 1.6;    ///< TetGen quality bound
+  int maxInfluences = 4;           ///< bone weights kept per node
+  double surfaceReduction = 0.0;   ///< fraction of surface triangles removed by decimation
+};
+
+struct StageTime {
+  std::string stage;
+  double seconds;
+};
+
+/// Reads a label volume; float files holding whole numbers are accepted. Throws std::runtime_error
+/// "FILE: problem" (unreadable, not integer, empty).
+vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path);
+/// Reads an intensity image (CT/MRI) as float.
+vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path);
+/// Writes an image, format from the extension; throws std::runtime_error naming the file.
+void writeImage(vtkImageData* image, const std::string& path);
+void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path);
+void writeSurfaces(vtkPolyData* surfaces, const std::string& path);
+/// Throws std::runtime_error "LABEL_FILE and IMAGE_FILE are on different grids (...)".
+void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
+                   const std::string& imageName);
+
+class Pipeline {
+public:
+  Pipeline();
+  ~Pipeline();
+
+  using Progress = std::function<void(const std::string& stage)>;
+  void setProgress(Progress progress) { progress_ = std::move(progress); }
+
+  // --- preprocessing -------------------------------------------------------------------------
+  /// Validates the skeleton against the labels (every bone label present) and runs meshing,
+  /// weights, surface extraction and binding. `image` may be null. Names are used in messages.
+  void prepare(vtkImageData* labels, const std::string& labelsName, const std::string& skeletonJson,
+               const std::string& skeletonName, vtkImageData* image, const PrepareSettings& settings);
+  /// Writes mesh.vtu, surfaces.vtp, skeleton.json, labels<ext>, manifest.json atomically.
+  void saveCase(const std::string& caseDir, const std::string& labelsExtension = ".nii.gz") const;
+  /// Throws std::runtime_error naming the missing or broken file.
+  void loadCase(const std::string& caseDir);
+
+  // --- posing --------------------------------------------------------------------------------
+  /// Validates (unknown joints, NaN, zero axis) and sets the pose; throws std::runtime_error.
+  void setPose(const std::string& poseJson, const std::string& poseName);
+  void setSkinningMethod(const std::string& method);  ///< "dqs" | "lbs"
+  /// Optional intensity image on the rest label grid, posed with trilinear sampling.
+  void setRestImage(vtkImageData* image, const std::string& imageName);
+
+  vtkUnstructuredGrid* posedMesh();
+  vtkPolyData* posedSurfaces();
+  vtkImageData* posedLabels();
+  vtkImageData* posedImage();   ///< null without a rest image
+
+  vtkUnstructuredGrid* restMesh() const { return restMesh_; }
+  vtkPolyData* restSurfaces() const { return restSurfaces_; }
+  vtkImageData* restLabels() const { return restLabels_; }
+  const std::string& skeletonJson() const { return skeletonJson_; }
+  const std::string& labelsExtension() const { return labelsExtension_; }
+
+  /// Time of every stage run so far, in order.
+  const std::vector<StageTime>& timings() const { return timings_; }
+  /// One line per preprocessing figure (counts, weight checks), for the manifest and the console.
+  const std::vector<std::string>& reportLines() const { return report_; }
+
+private:
+  void connectPosing();
+  void note(const std::string& stage);
+  void timed(const std::string& stage, double seconds);
+
+  Progress progress_;
+  std::string skeletonJson_, labelsExtension_ = ".nii.gz";
+  vtkSmartPointer<vtkImageData> restLabels_, restImage_;
+  vtkSmartPointer<vtkUnstructuredGrid> restMesh_;
+  vtkSmartPointer<vtkPolyData> restSurfaces_;
+  vtkSmartPointer<vtkReposeSkinning> skinning_;
+  vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
+  vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;
+  std::vector<StageTime> timings_;
+  std::vector<std::string> report_;
+};
+
+}  // namespace repose

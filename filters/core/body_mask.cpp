@@ -1,0 +1,198 @@
+#include "body_mask.h"
+
+#include <algorithm>
+#include <deque>
+#include <stdexcept>
+#include <string>
+
+#include "parallel_for.h"
+
+namespace repose {
+
+namespace {
+
+void checkVolume(const char* what, const ImageGrid& grid, std::size_t size) {
+  if (grid.dims[0] <= 0 || grid.dims[1] <= 0 || grid.dims[2] <= 0)
+    throw std::invalid_argument(std::string(what) + ": the image has no voxels");
+  if (size != grid.voxelCount())
+    throw std::invalid_argument(std::string(what) + ": data holds " + std::to_string(size) +
+                                " values but the grid has " + std::to_string(grid.voxelCount()) + " voxels");
+}
+
+// Visits, with 6-connectivity, every voxel whose value equals `from` reachable from the voxels of
+// `starts`, and sets it to `to`. The queue holds the wavefront only (a surface, not the volume).
+std::size_t flood3d(std::vector<std::uint8_t>& v, const std::array<int, 3>& d, std::deque<std::size_t>& queue,
+                    std::uint8_t from, std::uint8_t to) {
+  const std::size_t sx = 1, sy = std::size_t(d[0]), sz = std::size_t(d[0]) * d[1];
+  std::size_t count = 0;
+  while (!queue.empty()) {
+    const std::size_t p = queue.front();
+    queue.pop_front();
+    ++count;
+    const int i = int(p % sy), j = int((p / sy) % d[1]), k = int(p / sz);
+    auto visit = [&](std::size_t q) {
+      if (v[q] == from) {
+        v[q] = to;
+        queue.push_back(q);
+      }
+    };
+    if (i > 0) visit(p - sx);
+    if (i + 1 < d[0]) visit(p + sx);
+    if (j > 0) visit(p - sy);
+    if (j + 1 < d[1]) visit(p + sy);
+    if (k > 0) visit(p - sz);
+    if (k + 1 < d[2]) visit(p + sz);
+  }
+  return count;
+}
+
+// Keeps the largest 6-connected component of the non-zero voxels (values become 0/1).
+void keepLargestComponent(std::vector<std::uint8_t>& v, const std::array<int, 3>& d) {
+  constexpr std::uint8_t kFg = 1, kSeen = 2, kKeep = 3;
+  std::size_t bestSeed = 0, bestSize = 0;
+  std::deque<std::size_t> queue;
+  for (std::size_t p = 0; p < v.size(); ++p) {
+    if (v[p] != kFg) continue;
+    v[p] = kSeen;
+    queue.push_back(p);
+    const std::size_t size = flood3d(v, d, queue, kFg, kSeen);
+    if (size > bestSize) {
+      bestSize = size;
+      bestSeed = p;
+    }
+  }
+  if (bestSize == 0) return;
+  v[bestSeed] = kKeep;
+  queue.push_back(bestSeed);
+  flood3d(v, d, queue, kSeen, kKeep);
+  for (auto& x : v) x = (x == kKeep) ? 1 : 0;
+}
+
+// Fills the background regions of each k-slice that are not 4-connected to the slice border.
+void fillHolesPerSlice(std::vector<std::uint8_t>& v, const std::array<int, 3>& d) {
+  const int nx = d[0], ny = d[1];
+  parallelFor(std::size_t(d[2]), [&](std::size_t kb, std::size_t ke) {
+    std::vector<std::uint8_t> outside;
+    std::vector<int> stack;
+    for (std::size_t k = kb; k < ke; ++k) {
+      std::uint8_t* s = v.data() + k * std::size_t(nx) * ny;
+      outside.assign(std::size_t(nx) * ny, 0);
+      stack.clear();
+      auto push = [&](int q) {
+        if (!s[q] && !outside[q]) {
+          outside[q] = 1;
+          stack.push_back(q);
+        }
+      };
+      for (int i = 0; i < nx; ++i) {
+        push(i);
+        push((ny - 1) * nx + i);
+      }
+      for (int j = 0; j < ny; ++j) {
+        push(j * nx);
+        push(j * nx + nx - 1);
+      }
+      while (!stack.empty()) {
+        const int q = stack.back();
+        stack.pop_back();
+        const int i = q % nx, j = q / nx;
+        if (i > 0) push(q - 1);
+        if (i + 1 < nx) push(q + 1);
+        if (j > 0) push(q - nx);
+        if (j + 1 < ny) push(q + nx);
+      }
+      for (std::size_t q = 0; q < outside.size(); ++q)
+        if (!outside[q]) s[q] = 1;
+    }
+  }, 1);
+}
+
+// Fills the background not 6-connected to the volume border.
+void fillHoles3d(std::vector<std::uint8_t>& v, const std::array<int, 3>& d) {
+  constexpr std::uint8_t kOutside = 2;
+  std::deque<std::size_t> queue;
+  auto seed = [&](int i, int j, int k) {
+    const std::size_t p = (std::size_t(k) * d[1] + j) * d[0] + i;
+    if (v[p] == 0) {
+      v[p] = kOutside;
+      queue.push_back(p);
+    }
+  };
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j) {
+      seed(0, j, k);
+      seed(d[0] - 1, j, k);
+    }
+  for (int k = 0; k < d[2]; ++k)
+    for (int i = 0; i < d[0]; ++i) {
+      seed(i, 0, k);
+      seed(i, d[1] - 1, k);
+    }
+  for (int j = 0; j < d[1]; ++j)
+    for (int i = 0; i < d[0]; ++i) {
+      seed(i, j, 0);
+      seed(i, j, d[2] - 1);
+    }
+  flood3d(v, d, queue, 0, kOutside);
+  for (auto& x : v) x = (x == kOutside) ? 0 : 1;
+}
+
+}  // namespace
+
+MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, const BodyMaskOptions& options) {
+  checkVolume("body mask: label volume", labels.grid, labels.data.size());
+  if (image) {
+    checkVolume("body mask: intensity image", image->grid, image->data.size());
+    if (!labels.grid.sameGridAs(image->grid))
+      throw std::invalid_argument(
+          "body mask: the intensity image is not on the label volume's grid (dims, origin, spacing and "
+          "direction must match); resample it onto the labels first");
+  }
+  MaskVolume mask;
+  mask.grid = labels.grid;
+  mask.data.assign(labels.data.size(), 0);
+  const float threshold = float(options.bodyThreshold);
+  parallelFor(mask.data.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p)
+      mask.data[p] = (labels.data[p] != 0 || (image && image->data[p] > threshold)) ? 1 : 0;
+  }, 1 << 16);
+
+  const auto& d = mask.grid.dims;
+  if (options.keepLargestComponent) keepLargestComponent(mask.data, d);
+  if (options.fillHoles) {
+    fillHolesPerSlice(mask.data, d);
+    fillHoles3d(mask.data, d);
+  }
+  if (std::find(mask.data.begin(), mask.data.end(), std::uint8_t(1)) == mask.data.end())
+    throw std::invalid_argument(
+        "body mask is empty: no voxel has a non-zero label" +
+        std::string(image ? " or an intensity above the body threshold (" + std::to_string(options.bodyThreshold) + ")"
+                          : "") +
+        "; check the label volume (and the threshold)");
+  return mask;
+}
+
+MaskVolume peelOuterLayer(const MaskVolume& mask) {
+  checkVolume("peel outer layer: mask", mask.grid, mask.data.size());
+  MaskVolume out;
+  out.grid = mask.grid;
+  out.data.assign(mask.data.size(), 0);
+  const auto& d = mask.grid.dims;
+  const std::size_t sy = std::size_t(d[0]), sz = std::size_t(d[0]) * d[1];
+  parallelFor(std::size_t(d[2]), [&](std::size_t kb, std::size_t ke) {
+    for (int k = int(kb); k < int(ke); ++k)
+      for (int j = 0; j < d[1]; ++j)
+        for (int i = 0; i < d[0]; ++i) {
+          const std::size_t p = k * sz + j * sy + i;
+          if (!mask.data[p]) continue;
+          // Voxels on the image border count as outer layer (outside the image is background).
+          if (i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1) continue;
+          if (mask.data[p - 1] && mask.data[p + 1] && mask.data[p - sy] && mask.data[p + sy] &&
+              mask.data[p - sz] && mask.data[p + sz])
+            out.data[p] = 1;
+        }
+  }, 1);
+  return out;
+}
+
+}  // namespace repose

@@ -1,0 +1,23 @@
+#pragma once
+// The region to mesh: every non-background voxel, optionally united with CT above a threshold.
+#include <optional>
+
+#include "image_grid.h"
+
+namespace repose {
+
+struct BodyMaskOptions {
+  double bodyThreshold = -500.0;  ///< HU; CT voxels above it count as body
+  bool fillHoles = true;          ///< fill cavities (slice by slice along k and in 3-D)
+  bool keepLargestComponent = true;
+};
+
+/// mask = labels != 0 (∪ image > threshold), holes filled, largest 6-connected component kept.
+/// Throws std::invalid_argument when the image is on a different grid or the mask is empty.
+MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, const BodyMaskOptions& options);
+
+/// Removes the outer voxel layer (6-neighbourhood erosion), so parts that touch skin-to-skin in the
+/// scan (an arm against the torso, the thighs) are not welded together by the mesh.
+MaskVolume peelOuterLayer(const MaskVolume& mask);
+
+}  // namespace repose

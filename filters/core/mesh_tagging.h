@@ -1,0 +1,30 @@
+#pragma once
+// Links the tet mesh to the label volume: bone seeds for meshing, node-to-bone and tet labels.
+#include <vector>
+
+#include "image_grid.h"
+#include "tet_mesh.h"
+
+namespace repose {
+
+/// Points to insert into the mesh so every bone is resolved: centres of bone voxels on each bone's
+/// boundary, subsampled on a lattice of `surfaceStep` voxels, and of interior bone voxels every
+/// `interiorStep` voxels. Only voxels inside `mask` are used. boneOfLabel maps label -> bone or -1.
+Points boneSeedPoints(const LabelVolume& labels, const std::vector<int>& boneOfLabel, const MaskVolume& mask,
+                      int surfaceStep = 2, int interiorStep = 4);
+
+/// Fills mesh.fixedBone (bone of the nearest voxel's label at each node, -1 when not bone) and
+/// mesh.tetLabel (label of the nearest voxel at each tet's centroid).
+void tagMesh(TetMesh& mesh, const LabelVolume& labels, const std::vector<int>& boneOfLabel);
+
+struct ComponentReport {
+  int componentsKept = 0, componentsDropped = 0;
+  int nodesDropped = 0, tetsDropped = 0;
+};
+
+/// Keeps the connected components of the tagged mesh (tets connected through shared nodes) that hold
+/// at least one fixed (bone) node: a free-floating piece cannot be posed. Renumbers the nodes and
+/// keeps fixedBone / tetLabel in step. Throws std::invalid_argument when no component holds a bone node.
+ComponentReport keepBoneComponents(TetMesh& mesh);
+
+}  // namespace repose

@@ -1,0 +1,159 @@
+#include "pose.h"
+
+#include <json/json.h>
+
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace repose {
+namespace {
+
+[[noreturn]] void fail(const std::string& message) {
+  throw std::invalid_argument("pose.json: " + message);
+}
+
+// Reads a JSON array of n finite numbers; `what` names it in errors.
+template <int N>
+Eigen::Matrix<double, N, 1> readVector(const Json::Value& v, const std::string& what) {
+  if (!v.isArray() || v.size() != Json::ArrayIndex(N))
+    fail(what + " must be an array of " + std::to_string(N) + " numbers");
+  Eigen::Matrix<double, N, 1> out;
+  for (int i = 0; i < N; ++i) {
+    if (!v[Json::ArrayIndex(i)].isNumeric())
+      fail(what + " must be an array of " + std::to_string(N) + " numbers");
+    out[i] = v[Json::ArrayIndex(i)].asDouble();
+    if (!std::isfinite(out[i])) fail(what + " has a non-finite value (NaN or inf)");
+  }
+  return out;
+}
+
+Eigen::Quaterniond readRotation(const std::string& joint, const Json::Value& r) {
+  const std::string where = "rotation of joint '" + joint + "'";
+  if (!r.isObject()) fail(where + " must be an object with \"axis\"+\"degrees\" or \"quaternion\"");
+  const bool hasAxis = r.isMember("axis") || r.isMember("degrees");
+  const bool hasQuat = r.isMember("quaternion");
+  if (hasAxis && hasQuat) fail(where + " has both \"axis\"/\"degrees\" and \"quaternion\"; give one");
+  if (hasQuat) {
+    const Eigen::Vector4d q = readVector<4>(r["quaternion"], where + ": \"quaternion\" [w,x,y,z]");
+    const double n = q.norm();
+    if (n < 1e-12) fail(where + ": \"quaternion\" is zero");
+    return Eigen::Quaterniond(q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+  }
+  if (!hasAxis) fail(where + " needs \"axis\" and \"degrees\", or \"quaternion\"");
+  if (!r.isMember("axis")) fail(where + " has \"degrees\" but no \"axis\"");
+  if (!r.isMember("degrees")) fail(where + " has \"axis\" but no \"degrees\"");
+  const Eigen::Vector3d axis = readVector<3>(r["axis"], where + ": \"axis\"");
+  const double n = axis.norm();
+  if (n < 1e-12) fail(where + ": \"axis\" is zero");
+  if (!r["degrees"].isNumeric()) fail(where + ": \"degrees\" must be a number");
+  const double deg = r["degrees"].asDouble();
+  if (!std::isfinite(deg)) fail(where + ": \"degrees\" is not finite");
+  return Eigen::Quaterniond(Eigen::AngleAxisd(deg * M_PI / 180.0, axis / n));
+}
+
+}  // namespace
+
+Pose parsePoseJson(const std::string& text) {
+  Json::CharReaderBuilder builder;
+  builder["collectComments"] = false;
+  builder["allowSpecialFloats"] = true;  // NaN/Infinity parse, so the error can say which value
+  std::unique_ptr<Json::CharReader> reader(builder.newCharReader());
+  Json::Value root;
+  std::string errors;
+  if (!reader->parse(text.data(), text.data() + text.size(), &root, &errors))
+    fail("malformed JSON: " + errors);
+  if (!root.isObject()) fail("top level must be an object {\"rotations\": {...}, \"translation\": [x,y,z]}");
+
+  Pose pose;
+  const Json::Value& rotations = root["rotations"];
+  if (!rotations.isNull()) {
+    if (!rotations.isObject()) fail("\"rotations\" must be an object {JOINT: rotation}");
+    for (const std::string& name : rotations.getMemberNames())
+      pose.rotations[name] = readRotation(name, rotations[name]);
+  }
+  if (root.isMember("translation"))
+    pose.translation = readVector<3>(root["translation"], "\"translation\"");
+  return pose;
+}
+
+std::string poseToJson(const Pose& pose) {
+  Json::Value root(Json::objectValue);
+  Json::Value rotations(Json::objectValue);
+  for (const auto& [name, q] : pose.rotations) {
+    Json::Value quat(Json::arrayValue);
+    quat.append(q.w());
+    quat.append(q.x());
+    quat.append(q.y());
+    quat.append(q.z());
+    Json::Value r(Json::objectValue);
+    r["quaternion"] = quat;
+    rotations[name] = r;
+  }
+  root["rotations"] = rotations;
+  Json::Value t(Json::arrayValue);
+  for (int i = 0; i < 3; ++i) t.append(pose.translation[i]);
+  root["translation"] = t;
+  Json::StreamWriterBuilder writer;
+  writer["indentation"] = "  ";
+  writer["precision"] = 17;
+  return Json::writeString(writer, root) + "\n";
+}
+
+Pose readPoseFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument(path + ": cannot read");
+  std::ostringstream text;
+  text << in.rdbuf();
+  try {
+    return parsePoseJson(text.str());
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + ": " + e.what());
+  }
+}
+
+void validatePose(const Pose& pose, const Skeleton& skeleton) {
+  for (const auto& [name, q] : pose.rotations) {
+    if (skeleton.find(name) < 0) {
+      std::string known;
+      for (const Joint& j : skeleton.joints) known += (known.empty() ? "" : ", ") + j.name;
+      throw std::invalid_argument("pose names unknown joint '" + name + "' (skeleton joints: " +
+                                  known + ")");
+    }
+    if (!std::isfinite(q.w()) || !std::isfinite(q.x()) || !std::isfinite(q.y()) ||
+        !std::isfinite(q.z()) || q.norm() < 1e-12)
+      throw std::invalid_argument("pose rotation of joint '" + name + "' is not a valid quaternion");
+  }
+  if (!pose.translation.allFinite())
+    throw std::invalid_argument("pose translation is not finite");
+}
+
+std::vector<Eigen::Isometry3d> forwardKinematics(const Skeleton& skeleton, const Pose& pose) {
+  validatePose(pose, skeleton);
+  const std::size_t n = skeleton.joints.size();
+  std::vector<Eigen::Isometry3d> global(n, Eigen::Isometry3d::Identity());
+  for (std::size_t j = 0; j < n; ++j) {
+    const Joint& joint = skeleton.joints[j];
+    Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
+    auto it = pose.rotations.find(joint.name);
+    if (it != pose.rotations.end()) {
+      const Eigen::Quaterniond q = it->second.normalized();
+      // T(c) R T(-c)
+      local.linear() = q.toRotationMatrix();
+      local.translation() = joint.center - local.linear() * joint.center;
+    }
+    if (joint.parent < 0) {
+      global[j] = Eigen::Translation3d(pose.translation) * local;
+    } else {
+      if (std::size_t(joint.parent) >= j)
+        throw std::invalid_argument("skeleton joint '" + joint.name +
+                                    "' is not stored after its parent (parse it with parseSkeletonJson)");
+      global[j] = global[joint.parent] * local;
+    }
+  }
+  return global;
+}
+
+}  // namespace repose

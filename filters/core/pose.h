@@ -1,0 +1,32 @@
+#pragma once
+// pose.json and forward kinematics.
+#include <Eigen/Geometry>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "skeleton.h"
+
+namespace repose {
+
+/// Local joint rotations (about each joint's rest centre, axes in the rest physical frame)
+/// plus a root translation.
+struct Pose {
+  std::map<std::string, Eigen::Quaterniond> rotations;
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+};
+
+/// Parses pose.json: {"rotations": {JOINT: {"axis":[x,y,z],"degrees":a} | {"quaternion":[w,x,y,z]}},
+/// "translation":[x,y,z]}. Throws std::invalid_argument on NaN/inf, a zero axis, a zero quaternion
+/// or malformed JSON. Joint names are checked against a skeleton by validatePose.
+Pose parsePoseJson(const std::string& text);
+std::string poseToJson(const Pose& pose);
+Pose readPoseFile(const std::string& path);
+/// Throws std::invalid_argument if the pose names a joint the skeleton does not have.
+void validatePose(const Pose& pose, const Skeleton& skeleton);
+
+/// Global rigid transform of every joint's bone (rest -> posed):
+/// G_j = G_parent · T(c_j) · R_j · T(-c_j), the root's preceded by T(translation).
+std::vector<Eigen::Isometry3d> forwardKinematics(const Skeleton& skeleton, const Pose& pose);
+
+}  // namespace repose

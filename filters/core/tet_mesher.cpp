@@ -1,0 +1,199 @@
+// The only file that includes tetgen.h (TetGen is AGPL; keep it swappable).
+#include "tet_mesher.h"
+
+#include <tetgen.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <new>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace repose {
+
+namespace {
+
+std::string tetgenErrorText(int code) {
+  switch (code) {
+    case 1: return "out of memory (reduce the surface size or the meshing resolution)";
+    case 2: return "internal error of TetGen";
+    case 3: return "the surface intersects itself (smooth less or check the mask for thin, touching parts)";
+    case 4: return "the surface has a very small feature compared to its size (check for degenerate triangles)";
+    case 5: return "two surface facets are very close to each other (parts of the surface almost touch)";
+    case 10: return "TetGen rejected the input";
+    default: return "TetGen failed with code " + std::to_string(code);
+  }
+}
+
+// A closed 2-manifold: every undirected edge is used by exactly two triangles.
+void checkClosedSurface(const Triangles& F) {
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(std::size_t(F.rows()) * 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      int a = F(f, c), b = F(f, (c + 1) % 3);
+      if (a == b) throw std::invalid_argument("tet mesher: triangle " + std::to_string(f) + " is degenerate");
+      edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  std::size_t open = 0, nonManifold = 0;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) ++open;
+    else if (j - i > 2) ++nonManifold;
+    i = j;
+  }
+  if (open || nonManifold)
+    throw std::invalid_argument("tet mesher: the surface is not a closed manifold (" + std::to_string(open) +
+                                " open edges, " + std::to_string(nonManifold) +
+                                " edges shared by more than two triangles)");
+}
+
+// TetGen 1.5.0's tetrahedralize() crashes when it reports an error: terminatetetgen() frees the mesh
+// and throws, then the destructor of its stack mesh frees it again. So the stages we use (-p without
+// -Y/-r/-m/-R, optional -i, -q) are driven here with a heap mesh, leaked on error (its pools are
+// already freed then).
+void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out, tetgenio* addin) {
+  auto* m = new tetgenmesh();
+  try {
+    m->b = &b;
+    m->in = &in;
+    m->addin = addin;
+    m->initializepools();
+    m->transfernodes();
+    exactinit(b.verbose, b.noexact, b.nostaticfilter, m->xmax - m->xmin, m->ymax - m->ymin, m->zmax - m->zmin);
+    clock_t stamp;
+    m->incrementaldelaunay(stamp);
+    m->meshsurface();
+    m->constraineddelaunay(stamp);
+    m->carveholes();
+    if (b.insertaddpoints && addin && addin->numberofpoints > 0) m->insertconstrainedpoints(addin);
+    if (b.quality) m->delaunayrefinement();
+    if (b.optlevel > 0) m->optimizemesh();
+    if (!b.nojettison && (m->dupverts > 0 || m->unuverts > 0)) m->jettisonnodes();
+    out.firstnumber = in.firstnumber;
+    out.mesh_dim = in.mesh_dim;
+    m->outnodes(&out);
+    if (m->tetrahedrons->items > 0) m->outelements(&out);
+  } catch (int) {
+    throw;  // m is leaked on purpose, see above
+  }
+  delete m;
+}
+
+}  // namespace
+
+TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points& seeds,
+                              const TetMeshingOptions& options, TetMeshingReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  if (V.rows() < 4 || F.rows() < 4)
+    throw std::invalid_argument("tet mesher: the surface needs at least 4 points and 4 triangles (got " +
+                                std::to_string(V.rows()) + " and " + std::to_string(F.rows()) + ")");
+  if (!V.allFinite()) throw std::invalid_argument("tet mesher: surface points must be finite");
+  if (seeds.rows() > 0 && !seeds.allFinite()) throw std::invalid_argument("tet mesher: seed points must be finite");
+  if (F.minCoeff() < 0 || F.maxCoeff() >= V.rows())
+    throw std::invalid_argument("tet mesher: a triangle refers to a point index outside [0, " +
+                                std::to_string(V.rows()) + ")");
+  if (options.radiusEdgeRatio != 0 && !(options.radiusEdgeRatio > 1.0))
+    throw std::invalid_argument("tet mesher: the radius-edge ratio must be > 1 (e.g. 1.6), or 0 for no quality bound");
+  if (options.minDihedralDegrees < 0 || options.minDihedralDegrees >= 70)
+    throw std::invalid_argument("tet mesher: the minimum dihedral angle must be in [0, 70) degrees");
+  if (options.maxTetVolume < 0) throw std::invalid_argument("tet mesher: the maximum tet volume must be >= 0");
+  checkClosedSurface(F);
+
+  tetgenio in, addin, out;
+  in.firstnumber = 0;
+  in.numberofpoints = int(V.rows());
+  in.pointlist = new REAL[std::size_t(V.rows()) * 3];
+  std::copy(V.data(), V.data() + V.size(), in.pointlist);  // row-major #V by 3
+  in.numberoffacets = int(F.rows());
+  in.facetlist = new tetgenio::facet[std::size_t(F.rows())];
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    tetgenio::facet& facet = in.facetlist[f];
+    tetgenio::init(&facet);
+    facet.numberofpolygons = 1;
+    facet.polygonlist = new tetgenio::polygon[1];
+    tetgenio::init(&facet.polygonlist[0]);
+    facet.polygonlist[0].numberofvertices = 3;
+    facet.polygonlist[0].vertexlist = new int[3]{F(f, 0), F(f, 1), F(f, 2)};
+  }
+  if (seeds.rows() > 0) {
+    addin.firstnumber = 0;
+    addin.numberofpoints = int(seeds.rows());
+    addin.pointlist = new REAL[std::size_t(seeds.rows()) * 3];
+    std::copy(seeds.data(), seeds.data() + seeds.size(), addin.pointlist);
+  }
+
+  // p: PLC, q: quality bound, a: volume bound, z: zero-based, i: insert addin points, F: no face
+  // output (not needed), Q/V: quiet/verbose. Boundary splitting stays allowed (more robust recovery).
+  std::ostringstream sw;
+  sw.precision(17);
+  sw << "p";
+  if (options.radiusEdgeRatio > 0) {
+    sw << "q" << options.radiusEdgeRatio;
+    if (options.minDihedralDegrees > 0) sw << "/" << options.minDihedralDegrees;
+  }
+  if (options.maxTetVolume > 0) sw << "a" << options.maxTetVolume;
+  sw << "zF";
+  if (seeds.rows() > 0) sw << "i";
+  sw << (options.verbose ? "V" : "Q");
+  std::string switches = sw.str();
+
+  tetgenbehavior behavior;
+  if (!behavior.parse_commandline(&switches[0]))
+    throw std::invalid_argument("tet mesher: TetGen rejected the switches '" + switches + "'");
+  try {
+    runTetGen(behavior, in, out, seeds.rows() > 0 ? &addin : nullptr);
+  } catch (int code) {
+    throw std::invalid_argument("tet mesher: " + tetgenErrorText(code));
+  } catch (const std::bad_alloc&) {
+    throw std::invalid_argument("tet mesher: " + tetgenErrorText(1));
+  }
+  if (out.numberoftetrahedra <= 0 || out.numberofcorners < 4)
+    throw std::invalid_argument("tet mesher: TetGen produced no tetrahedra (is the surface closed and non-degenerate?)");
+
+  // Keep only nodes used by tets, renumbered in their original order.
+  const int nOut = out.numberofpoints;
+  const int nc = out.numberofcorners;
+  std::vector<int> newIndex(std::size_t(nOut), -1);
+  for (int t = 0; t < out.numberoftetrahedra; ++t)
+    for (int c = 0; c < 4; ++c) {
+      const int v = out.tetrahedronlist[std::size_t(t) * nc + c];
+      if (v < 0 || v >= nOut) throw std::invalid_argument("tet mesher: TetGen returned an invalid node index");
+      newIndex[v] = 0;
+    }
+  int used = 0;
+  for (auto& v : newIndex)
+    if (v == 0) v = used++;
+
+  TetMesh mesh;
+  mesh.nodes.resize(used, 3);
+  for (int v = 0; v < nOut; ++v)
+    if (newIndex[v] >= 0)
+      for (int c = 0; c < 3; ++c) mesh.nodes(newIndex[v], c) = out.pointlist[std::size_t(v) * 3 + c];
+  mesh.tets.resize(out.numberoftetrahedra, 4);
+  for (int t = 0; t < out.numberoftetrahedra; ++t) {
+    for (int c = 0; c < 4; ++c) mesh.tets(t, c) = newIndex[out.tetrahedronlist[std::size_t(t) * nc + c]];
+    const Eigen::Vector3d a = mesh.nodes.row(mesh.tets(t, 0)), b = mesh.nodes.row(mesh.tets(t, 1)),
+                          c = mesh.nodes.row(mesh.tets(t, 2)), d = mesh.nodes.row(mesh.tets(t, 3));
+    if (tetVolume(a, b, c, d) < 0) std::swap(mesh.tets(t, 2), mesh.tets(t, 3));
+  }
+
+  if (report) {
+    report->inputPoints = int(V.rows());
+    report->inputFacets = int(F.rows());
+    report->seedPoints = int(seeds.rows());
+    report->nodes = int(mesh.nodes.rows());
+    report->tets = int(mesh.tets.rows());
+    report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return mesh;
+}
+
+}  // namespace repose

@@ -1,0 +1,362 @@
+#include "vtkReposeBodyMesher.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellData.h"
+#include "vtkCellType.h"
+#include "vtkDataArray.h"
+#include "vtkIdTypeArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkIntArray.h"
+#include "vtkMatrix3x3.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkReposeSurfaceExtractor.h"
+#include "vtkSmartPointer.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <sstream>
+
+#include "body_mask.h"
+#include "image_grid.h"
+#include "mesh_tagging.h"
+#include "skeleton.h"
+#include "tet_mesher.h"
+
+vtkStandardNewMacro(vtkReposeBodyMesher);
+
+namespace
+{
+using Clock = std::chrono::steady_clock;
+double SecondsSince(Clock::time_point t)
+{
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// vtkImageData (any scalar type) -> core volume on the same physical lattice.
+template <class T>
+bool ToVolume(vtkImageData* image, repose::Volume<T>& volume)
+{
+  vtkDataArray* scalars = image ? image->GetPointData()->GetScalars() : nullptr;
+  if (!scalars || scalars->GetNumberOfComponents() != 1)
+  {
+    return false;
+  }
+  int ext[6];
+  image->GetExtent(ext);
+  repose::ImageGrid& g = volume.grid;
+  g.dims = { ext[1] - ext[0] + 1, ext[3] - ext[2] + 1, ext[5] - ext[4] + 1 };
+  double origin[3];
+  image->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
+  const double* spacing = image->GetSpacing();
+  vtkMatrix3x3* d = image->GetDirectionMatrix();
+  for (int r = 0; r < 3; ++r)
+  {
+    g.origin[r] = origin[r];
+    g.spacing[r] = spacing[r];
+    for (int c = 0; c < 3; ++c)
+    {
+      g.direction(r, c) = d->GetElement(r, c);
+    }
+  }
+  const vtkIdType n = scalars->GetNumberOfTuples();
+  if (n != static_cast<vtkIdType>(g.voxelCount()))
+  {
+    return false;
+  }
+  volume.data.resize(static_cast<std::size_t>(n));
+  for (vtkIdType p = 0; p < n; ++p)
+  {
+    volume.data[static_cast<std::size_t>(p)] = static_cast<T>(scalars->GetComponent(p, 0));
+  }
+  return true;
+}
+
+vtkSmartPointer<vtkImageData> ToImage(const repose::MaskVolume& mask)
+{
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  const auto& g = mask.grid;
+  image->SetExtent(0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1);
+  image->SetOrigin(g.origin.data());
+  image->SetSpacing(g.spacing.data());
+  double d[9];
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      d[3 * r + c] = g.direction(r, c);
+    }
+  }
+  image->SetDirectionMatrix(d);
+  vtkNew<vtkUnsignedCharArray> values;
+  values->SetName("Mask");
+  values->SetNumberOfTuples(static_cast<vtkIdType>(mask.data.size()));
+  std::copy(mask.data.begin(), mask.data.end(), values->GetPointer(0));
+  image->GetPointData()->SetScalars(values);
+  return image;
+}
+
+// Triangle surface -> core arrays; false when a cell is not a triangle.
+bool ToTriangles(vtkPolyData* surface, repose::Points& V, repose::Triangles& F)
+{
+  V.resize(surface->GetNumberOfPoints(), 3);
+  for (vtkIdType p = 0; p < surface->GetNumberOfPoints(); ++p)
+  {
+    double x[3];
+    surface->GetPoint(p, x);
+    V.row(p) << x[0], x[1], x[2];
+  }
+  vtkCellArray* polys = surface->GetPolys();
+  F.resize(polys->GetNumberOfCells(), 3);
+  vtkIdType row = 0;
+  vtkIdType npts;
+  const vtkIdType* pts;
+  for (polys->InitTraversal(); polys->GetNextCell(npts, pts); ++row)
+  {
+    if (npts != 3)
+    {
+      return false;
+    }
+    F.row(row) << int(pts[0]), int(pts[1]), int(pts[2]);
+  }
+  return surface->GetNumberOfCells() == polys->GetNumberOfCells();
+}
+}
+
+vtkReposeBodyMesher::vtkReposeBodyMesher()
+{
+  this->SetNumberOfInputPorts(2);
+}
+
+int vtkReposeBodyMesher::FillInputPortInformation(int port, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  if (port == 1)
+  {
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+  }
+  return 1;
+}
+
+void vtkReposeBodyMesher::SetIntensityData(vtkImageData* image)
+{
+  this->SetInputData(1, image);
+}
+
+int vtkReposeBodyMesher::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  const auto start = Clock::now();
+  this->NumberOfNodes = this->NumberOfTets = this->NumberOfSurfaceTriangles = 0;
+  this->NumberOfSeedPoints = this->NumberOfFixedNodes = 0;
+  this->TotalSeconds = this->TetGenSeconds = 0;
+  this->Report.clear();
+
+  vtkImageData* labelImage = vtkImageData::GetData(inputVector[0]);
+  vtkImageData* intensityImage =
+    inputVector[1]->GetNumberOfInformationObjects() > 0 ? vtkImageData::GetData(inputVector[1]) : nullptr;
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  if (!labelImage || !labelImage->GetPointData()->GetScalars())
+  {
+    vtkErrorMacro("the label image (input 0) has no scalars");
+    return 0;
+  }
+  if (this->SkeletonJSON.empty())
+  {
+    vtkErrorMacro("SkeletonJSON is empty: the bones (and so the fixed nodes) come from the skeleton");
+    return 0;
+  }
+  std::ostringstream report;
+  try
+  {
+    auto t = Clock::now();
+    repose::LabelVolume labels;
+    if (!ToVolume(labelImage, labels))
+    {
+      vtkErrorMacro("the label image must have one scalar component per voxel");
+      return 0;
+    }
+    repose::IntensityVolume intensity;
+    if (intensityImage && !ToVolume(intensityImage, intensity))
+    {
+      vtkErrorMacro("the intensity image (input 1) must have one scalar component per voxel");
+      return 0;
+    }
+    const repose::Skeleton skeleton = repose::parseSkeletonJson(this->SkeletonJSON);
+    const int maxLabel = labels.data.empty() ? 0 : *std::max_element(labels.data.begin(), labels.data.end());
+    const std::vector<int> boneOfLabel = repose::boneOfLabel(skeleton, std::max(0, maxLabel));
+    report << "input: " << labels.grid.dims[0] << "x" << labels.grid.dims[1] << "x" << labels.grid.dims[2]
+           << " voxels, spacing " << labels.grid.spacing.transpose() << " mm, " << skeleton.size()
+           << " joints" << (intensityImage ? ", with intensity image" : "") << " (" << SecondsSince(t)
+           << " s)\n";
+
+    t = Clock::now();
+    repose::BodyMaskOptions maskOptions;
+    maskOptions.bodyThreshold = this->BodyThreshold;
+    repose::MaskVolume mask = repose::bodyMask(labels, intensityImage ? &intensity : nullptr, maskOptions);
+    std::size_t bodyVoxels = std::count(mask.data.begin(), mask.data.end(), 1);
+    std::size_t meshVoxels = bodyVoxels;
+    if (this->PeelOuterLayer)
+    {
+      mask = repose::peelOuterLayer(mask);
+      meshVoxels = std::count(mask.data.begin(), mask.data.end(), 1);
+      if (meshVoxels == 0)
+      {
+        vtkErrorMacro("the body is at most two voxels thick: nothing is left after peeling the outer "
+                      "layer; turn PeelOuterLayer off");
+        return 0;
+      }
+    }
+    report << "body mask: " << bodyVoxels << " voxels, " << meshVoxels << " after peeling ("
+           << SecondsSince(t) << " s)\n";
+
+    t = Clock::now();
+    vtkNew<vtkPolyData> surface;
+    if (!vtkReposeSurfaceExtractor::ContourMask(
+          ToImage(mask), this->MeshingSpacing, this->SurfaceSmoothingIterations, 0.1, 0.0, surface))
+    {
+      vtkErrorMacro("no body surface could be extracted (MeshingSpacing too coarse for the body?)");
+      return 0;
+    }
+    repose::Points V;
+    repose::Triangles F;
+    if (!ToTriangles(surface, V, F))
+    {
+      vtkErrorMacro("the body surface has non-triangle cells");
+      return 0;
+    }
+    this->NumberOfSurfaceTriangles = F.rows();
+    report << "surface: " << V.rows() << " points, " << F.rows() << " triangles (" << SecondsSince(t)
+           << " s)\n";
+
+    t = Clock::now();
+    const double minSpacing = labels.grid.spacing.minCoeff();
+    const double ratio = std::max(1.0, this->MeshingSpacing / minSpacing);
+    const int surfaceStep =
+      this->SeedSurfaceStep > 0 ? this->SeedSurfaceStep : std::max(2, int(std::lround(2 * ratio)));
+    const int interiorStep = this->SeedInteriorStep > 0 ? this->SeedInteriorStep : 2 * surfaceStep;
+    const repose::Points seeds = repose::boneSeedPoints(labels, boneOfLabel, mask, surfaceStep, interiorStep);
+    this->NumberOfSeedPoints = seeds.rows();
+    report << "bone seeds: " << seeds.rows() << " (steps " << surfaceStep << "/" << interiorStep
+           << " voxels, " << SecondsSince(t) << " s)\n";
+
+    repose::TetMeshingOptions meshOptions;
+    meshOptions.radiusEdgeRatio = this->RadiusEdgeRatio;
+    meshOptions.maxTetVolume = this->MaxTetVolume;
+    repose::TetMeshingReport tetReport;
+    repose::TetMesh mesh = repose::tetrahedralizeSurface(V, F, seeds, meshOptions, &tetReport);
+    this->TetGenSeconds = tetReport.seconds;
+    report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
+           << " s)\n";
+
+    t = Clock::now();
+    repose::tagMesh(mesh, labels, boneOfLabel);
+    const repose::ComponentReport components = repose::keepBoneComponents(mesh);
+    if (components.componentsDropped > 0)
+    {
+      vtkWarningMacro("dropped " << components.componentsDropped << " mesh component(s) without bone ("
+                                 << components.nodesDropped << " nodes, " << components.tetsDropped
+                                 << " tets); kept " << components.componentsKept);
+    }
+    std::vector<vtkIdType> fixedPerBone(skeleton.size(), 0);
+    for (int b : mesh.fixedBone)
+    {
+      if (b >= 0 && b < int(fixedPerBone.size()))
+      {
+        ++fixedPerBone[b];
+        ++this->NumberOfFixedNodes;
+      }
+    }
+    report << "tagging: " << this->NumberOfFixedNodes << " fixed nodes, " << components.componentsKept
+           << " component(s) kept, " << components.componentsDropped << " dropped ("
+           << components.nodesDropped << " nodes, " << components.tetsDropped << " tets) ("
+           << SecondsSince(t) << " s)\n";
+    for (std::size_t b = 0; b < fixedPerBone.size(); ++b)
+    {
+      report << "  " << skeleton.joints[b].name << ": " << fixedPerBone[b] << " fixed nodes\n";
+      if (fixedPerBone[b] == 0 && !skeleton.joints[b].labels.empty())
+      {
+        vtkWarningMacro("bone '" << skeleton.joints[b].name
+                                 << "' has no mesh node inside it: its labels are missing from the "
+                                    "meshed body or it is thinner than the mesh resolution");
+      }
+    }
+
+    // Core mesh -> vtkUnstructuredGrid.
+    const vtkIdType nv = mesh.nodes.rows(), nt = mesh.tets.rows();
+    vtkNew<vtkPoints> points;
+    points->SetDataTypeToDouble();
+    points->SetNumberOfPoints(nv);
+    for (vtkIdType v = 0; v < nv; ++v)
+    {
+      points->SetPoint(v, mesh.nodes(v, 0), mesh.nodes(v, 1), mesh.nodes(v, 2));
+    }
+    vtkNew<vtkIdTypeArray> offsets, connectivity;
+    offsets->SetNumberOfValues(nt + 1);
+    connectivity->SetNumberOfValues(4 * nt);
+    for (vtkIdType c = 0; c <= nt; ++c)
+    {
+      offsets->SetValue(c, 4 * c);
+    }
+    for (vtkIdType c = 0; c < nt; ++c)
+    {
+      for (int k = 0; k < 4; ++k)
+      {
+        connectivity->SetValue(4 * c + k, mesh.tets(c, k));
+      }
+    }
+    vtkNew<vtkCellArray> cells;
+    cells->SetData(offsets, connectivity);
+    output->SetPoints(points);
+    output->SetCells(VTK_TETRA, cells);
+
+    vtkNew<vtkIntArray> fixedBone;
+    fixedBone->SetName("FixedBone");
+    fixedBone->SetNumberOfValues(nv);
+    std::copy(mesh.fixedBone.begin(), mesh.fixedBone.end(), fixedBone->GetPointer(0));
+    output->GetPointData()->AddArray(fixedBone);
+    vtkNew<vtkIntArray> label;
+    label->SetName("Label");
+    label->SetNumberOfValues(nt);
+    std::copy(mesh.tetLabel.begin(), mesh.tetLabel.end(), label->GetPointer(0));
+    output->GetCellData()->AddArray(label);
+
+    this->NumberOfNodes = nv;
+    this->NumberOfTets = nt;
+    this->TotalSeconds = SecondsSince(start);
+    report << "output: " << nv << " nodes, " << nt << " tets; total " << this->TotalSeconds << " s\n";
+    this->Report = report.str();
+  }
+  catch (const std::exception& e)
+  {
+    this->Report = report.str() + "error: " + e.what() + "\n";
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  return 1;
+}
+
+void vtkReposeBodyMesher::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "SkeletonJSON: " << (this->SkeletonJSON.empty() ? "(empty)" : "(set)") << "\n";
+  os << indent << "BodyThreshold: " << this->BodyThreshold << "\n";
+  os << indent << "PeelOuterLayer: " << this->PeelOuterLayer << "\n";
+  os << indent << "MeshingSpacing: " << this->MeshingSpacing << "\n";
+  os << indent << "RadiusEdgeRatio: " << this->RadiusEdgeRatio << "\n";
+  os << indent << "MaxTetVolume: " << this->MaxTetVolume << "\n";
+  os << indent << "SurfaceSmoothingIterations: " << this->SurfaceSmoothingIterations << "\n";
+  os << indent << "SeedSurfaceStep: " << this->SeedSurfaceStep << "\n";
+  os << indent << "SeedInteriorStep: " << this->SeedInteriorStep << "\n";
+  os << indent << "NumberOfNodes: " << this->NumberOfNodes << "\n";
+  os << indent << "NumberOfTets: " << this->NumberOfTets << "\n";
+}

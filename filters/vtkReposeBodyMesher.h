@@ -1,0 +1,114 @@
+#ifndef vtkReposeBodyMesher_h
+#define vtkReposeBodyMesher_h
+// Volumetrization (stage 1): label volume (+ CT) -> tetrahedral mesh of the body with bone nodes tagged.
+//
+// Input port 0: label image (integer scalars; origin, spacing and direction honoured).
+// Input port 1 (optional): intensity image (CT) on the same grid.
+// Output: vtkUnstructuredGrid of VTK_TETRA cells in physical coordinates (mm), positively oriented,
+// point data "FixedBone" (int: joint index of the bone the node lies in, -1 = free) and cell data
+// "Label" (int: label value at the tet's centroid).
+//
+// Pipeline: body mask (labels != 0, united with CT > BodyThreshold, holes filled, largest component)
+// -> optional peel of the outer voxel layer (so skin-to-skin contacts are not welded) -> surface
+// (discrete flying edges, windowed-sinc smoothing; resampled to MeshingSpacing when that is coarser
+// than the image) -> TetGen quality tetrahedralization with seed points in every bone -> node and tet
+// tagging -> only mesh components containing bone nodes are kept.
+
+#include "ReposeFiltersModule.h"
+#include "vtkUnstructuredGridAlgorithm.h"
+
+#include <string>
+
+class vtkAlgorithmOutput;
+class vtkImageData;
+
+class REPOSEFILTERS_EXPORT vtkReposeBodyMesher : public vtkUnstructuredGridAlgorithm
+{
+public:
+  static vtkReposeBodyMesher* New();
+  vtkTypeMacro(vtkReposeBodyMesher, vtkUnstructuredGridAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /// skeleton.json text; the bones are the labels listed by its joints (required).
+  vtkSetStdStringFromCharMacro(SkeletonJSON);
+  vtkGetCharFromStdStringMacro(SkeletonJSON);
+
+  /// HU above which CT voxels belong to the body (used only with an intensity input). Default -500.
+  vtkSetMacro(BodyThreshold, double);
+  vtkGetMacro(BodyThreshold, double);
+
+  /// Remove the outer voxel layer of the body mask before meshing (default on).
+  vtkSetMacro(PeelOuterLayer, bool);
+  vtkGetMacro(PeelOuterLayer, bool);
+  vtkBooleanMacro(PeelOuterLayer, bool);
+
+  /// Spacing (mm) of the lattice the surface is extracted on; 0 (default) = the image spacing.
+  /// Coarser values give fewer tets (the main size control). Gaps between body parts narrower
+  /// than about this spacing may be welded.
+  vtkSetClampMacro(MeshingSpacing, double, 0.0, 1000.0);
+  vtkGetMacro(MeshingSpacing, double);
+
+  /// TetGen quality bound (radius-edge ratio, > 1; default 1.6) and maximum tet volume (mm^3, 0 = none).
+  vtkSetClampMacro(RadiusEdgeRatio, double, 1.05, 100.0);
+  vtkGetMacro(RadiusEdgeRatio, double);
+  vtkSetClampMacro(MaxTetVolume, double, 0.0, 1e12);
+  vtkGetMacro(MaxTetVolume, double);
+
+  /// Windowed-sinc smoothing iterations of the body surface (0 = none; default 10).
+  vtkSetClampMacro(SurfaceSmoothingIterations, int, 0, 1000);
+  vtkGetMacro(SurfaceSmoothingIterations, int);
+
+  /// Spacing, in voxels, of the bone seed points on bone boundaries and in bone interiors
+  /// (0 = automatic: 2 and 4 voxels, scaled up when MeshingSpacing is coarser than the image).
+  vtkSetClampMacro(SeedSurfaceStep, int, 0, 1000);
+  vtkGetMacro(SeedSurfaceStep, int);
+  vtkSetClampMacro(SeedInteriorStep, int, 0, 1000);
+  vtkGetMacro(SeedInteriorStep, int);
+
+  /// Optional intensity image (CT) on the label grid.
+  void SetIntensityConnection(vtkAlgorithmOutput* port) { this->SetInputConnection(1, port); }
+  void SetIntensityData(vtkImageData* image);
+
+  /// Figures of the last run.
+  vtkGetMacro(NumberOfNodes, vtkIdType);
+  vtkGetMacro(NumberOfTets, vtkIdType);
+  vtkGetMacro(NumberOfSurfaceTriangles, vtkIdType);
+  vtkGetMacro(NumberOfSeedPoints, vtkIdType);
+  vtkGetMacro(NumberOfFixedNodes, vtkIdType);
+  vtkGetMacro(TotalSeconds, double);
+  vtkGetMacro(TetGenSeconds, double);
+  /// Multi-line text report of the last run (counts and timings per stage).
+  const char* GetReport() { return this->Report.c_str(); }
+
+protected:
+  vtkReposeBodyMesher();
+  ~vtkReposeBodyMesher() override = default;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  std::string SkeletonJSON;
+  double BodyThreshold = -500.0;
+  bool PeelOuterLayer = true;
+  double MeshingSpacing = 0.0;
+  double RadiusEdgeRatio = 1.6;
+  double MaxTetVolume = 0.0;
+  int SurfaceSmoothingIterations = 10;
+  int SeedSurfaceStep = 0;
+  int SeedInteriorStep = 0;
+
+  vtkIdType NumberOfNodes = 0;
+  vtkIdType NumberOfTets = 0;
+  vtkIdType NumberOfSurfaceTriangles = 0;
+  vtkIdType NumberOfSeedPoints = 0;
+  vtkIdType NumberOfFixedNodes = 0;
+  double TotalSeconds = 0;
+  double TetGenSeconds = 0;
+  std::string Report;
+
+private:
+  vtkReposeBodyMesher(const vtkReposeBodyMesher&) = delete;
+  void operator=(const vtkReposeBodyMesher&) = delete;
+};
+
+#endif

@@ -1,0 +1,181 @@
+#include "vtkReposeSkinning.h"
+
+#include "vtkDataArray.h"
+#include "vtkFloatArray.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkSMPTools.h"
+#include "vtkSmartPointer.h"
+#include "vtkUnstructuredGrid.h"
+
+#include "pose.h"
+#include "skeleton.h"
+#include "skinning.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+vtkStandardNewMacro(vtkReposeSkinning);
+
+// Core-typed cache of the input, rebuilt only when the input changes.
+struct vtkReposeSkinning::Internals
+{
+  vtkUnstructuredGrid* CachedInput = nullptr;  // identity only, never dereferenced
+  vtkMTimeType CachedInputTime = 0;
+  repose::Points Rest;
+  repose::SparseWeights Weights;
+  std::vector<int> FixedBone;
+  repose::Points Posed;
+  vtkSmartPointer<vtkPoints> OutputPoints;
+
+  void Convert(vtkUnstructuredGrid* input)
+  {
+    const vtkIdType np = input->GetNumberOfPoints();
+    this->Rest.resize(np, 3);
+    for (vtkIdType i = 0; i < np; ++i)
+    {
+      double p[3];
+      input->GetPoint(i, p);
+      this->Rest.row(i) << p[0], p[1], p[2];
+    }
+    vtkPointData* pd = input->GetPointData();
+    vtkDataArray* w = pd->GetArray("Weights");
+    vtkDataArray* b = pd->GetArray("BoneIds");
+    if (!w || !b)
+      throw std::invalid_argument(
+        "input lacks point data \"Weights\" and \"BoneIds\" (run vtkReposeBoneWeights first)");
+    const int k = w->GetNumberOfComponents();
+    if (b->GetNumberOfComponents() != k || w->GetNumberOfTuples() != np ||
+      b->GetNumberOfTuples() != np)
+      throw std::invalid_argument("point data \"Weights\" and \"BoneIds\" disagree in size");
+    this->Weights.k = k;
+    this->Weights.weight.resize(std::size_t(np) * k);
+    this->Weights.bone.resize(std::size_t(np) * k);
+    for (vtkIdType i = 0; i < np; ++i)
+      for (int c = 0; c < k; ++c)
+      {
+        const std::size_t s = std::size_t(i) * k + c;
+        this->Weights.weight[s] = static_cast<float>(w->GetComponent(i, c));
+        const double bone = b->GetComponent(i, c);
+        if (bone < 0 || bone > 65535 || bone != std::floor(bone))
+          throw std::invalid_argument("BoneIds of node " + std::to_string(i) + " holds " +
+            std::to_string(bone) + ", not a bone index");
+        this->Weights.bone[s] = static_cast<std::uint16_t>(bone);
+      }
+    this->FixedBone.clear();
+    if (vtkDataArray* f = pd->GetArray("FixedBone"))
+    {
+      if (f->GetNumberOfComponents() != 1 || f->GetNumberOfTuples() != np)
+        throw std::invalid_argument("point data \"FixedBone\" must have 1 component per node");
+      this->FixedBone.resize(np);
+      for (vtkIdType i = 0; i < np; ++i)
+        this->FixedBone[i] = static_cast<int>(f->GetComponent(i, 0));
+    }
+  }
+};
+
+vtkReposeSkinning::vtkReposeSkinning()
+  : Internal(new Internals)
+{
+}
+
+vtkReposeSkinning::~vtkReposeSkinning()
+{
+  this->SetSkeletonJSON(nullptr);
+  this->SetPoseJSON(nullptr);
+  delete this->Internal;
+}
+
+const char* vtkReposeSkinning::GetSkinningMethodAsString()
+{
+  return this->SkinningMethod == LinearBlend ? "LinearBlend" : "DualQuaternion";
+}
+
+int vtkReposeSkinning::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
+  return 1;
+}
+
+int vtkReposeSkinning::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0], 0);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
+  this->LastError.clear();
+  if (!input || !output)
+  {
+    this->LastError = "missing input or output";
+    vtkErrorMacro(<< this->LastError);
+    return 0;
+  }
+  Internals& in = *this->Internal;
+  try
+  {
+    if (!this->SkeletonJSON || !*this->SkeletonJSON)
+      throw std::invalid_argument("SkeletonJSON is not set");
+    const repose::Skeleton skeleton = repose::parseSkeletonJson(this->SkeletonJSON);
+    const repose::Pose pose = (this->PoseJSON && *this->PoseJSON)
+      ? repose::parsePoseJson(this->PoseJSON)
+      : repose::Pose{};
+    const std::vector<Eigen::Isometry3d> bones = repose::forwardKinematics(skeleton, pose);
+
+    this->LastRunUsedCache = in.CachedInput == input && in.CachedInputTime == input->GetMTime();
+    if (!this->LastRunUsedCache)
+    {
+      in.CachedInput = nullptr;
+      in.Convert(input);
+      in.CachedInput = input;
+      in.CachedInputTime = input->GetMTime();
+    }
+
+    const auto t0 = Clock::now();
+    repose::skinNodes(in.Rest, in.Weights, in.FixedBone, bones,
+      this->SkinningMethod == LinearBlend ? repose::SkinningMethod::LinearBlend
+                                          : repose::SkinningMethod::DualQuaternion,
+      in.Posed);
+    this->LastSkinningTime = std::chrono::duration<double>(Clock::now() - t0).count();
+
+    // Reuse one float vtkPoints so a new pose does not reallocate.
+    const vtkIdType np = in.Posed.rows();
+    if (!in.OutputPoints)
+    {
+      in.OutputPoints = vtkSmartPointer<vtkPoints>::New();
+      in.OutputPoints->SetDataTypeToFloat();
+    }
+    in.OutputPoints->SetNumberOfPoints(np);
+    float* dst = static_cast<vtkFloatArray*>(in.OutputPoints->GetData())->GetPointer(0);
+    const double* src = in.Posed.data();
+    vtkSMPTools::For(0, 3 * np, 65536, [dst, src](vtkIdType b, vtkIdType e) {
+      for (vtkIdType i = b; i < e; ++i)
+        dst[i] = static_cast<float>(src[i]);
+    });
+    in.OutputPoints->Modified();
+
+    output->ShallowCopy(input);
+    output->SetPoints(in.OutputPoints);
+  }
+  catch (const std::exception& e)
+  {
+    this->LastError = e.what();
+    vtkErrorMacro(<< "skinning: " << e.what());
+    return 0;
+  }
+  this->LastExecuteTime = std::chrono::duration<double>(Clock::now() - start).count();
+  return 1;
+}
+
+void vtkReposeSkinning::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "SkeletonJSON: " << (this->SkeletonJSON ? "(set)" : "(none)") << "\n";
+  os << indent << "PoseJSON: " << (this->PoseJSON ? this->PoseJSON : "(rest pose)") << "\n";
+  os << indent << "SkinningMethod: " << this->GetSkinningMethodAsString() << "\n";
+  os << indent << "LastSkinningTime: " << this->LastSkinningTime << "\n";
+}

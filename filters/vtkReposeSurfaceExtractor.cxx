@@ -1,0 +1,410 @@
+#include "vtkReposeSurfaceExtractor.h"
+
+#include "vtkAppendPolyData.h"
+#include "vtkCellData.h"
+#include "vtkDataArray.h"
+#include "vtkDiscreteFlyingEdges3D.h"
+#include "vtkFlyingEdges3D.h"
+#include "vtkImageCast.h"
+#include "vtkImageConstantPad.h"
+#include "vtkImageData.h"
+#include "vtkImageResize.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkIntArray.h"
+#include "vtkMatrix3x3.h"
+#include "vtkMatrix4x4.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPolyData.h"
+#include "vtkPolyDataNormals.h"
+#include "vtkQuadricDecimation.h"
+#include "vtkSmartPointer.h"
+#include "vtkTransform.h"
+#include "vtkTransformPolyDataFilter.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkWindowedSincPolyDataFilter.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <map>
+
+#include "body_mask.h"
+#include "image_grid.h"
+#include "skeleton.h"
+
+vtkStandardNewMacro(vtkReposeSurfaceExtractor);
+
+namespace
+{
+// vtkImageData (any scalar type) -> core volume on the same physical lattice.
+template <class T>
+bool ToVolume(vtkImageData* image, repose::Volume<T>& volume)
+{
+  vtkDataArray* scalars = image ? image->GetPointData()->GetScalars() : nullptr;
+  if (!scalars || scalars->GetNumberOfComponents() != 1)
+  {
+    return false;
+  }
+  int ext[6];
+  image->GetExtent(ext);
+  repose::ImageGrid& g = volume.grid;
+  g.dims = { ext[1] - ext[0] + 1, ext[3] - ext[2] + 1, ext[5] - ext[4] + 1 };
+  double origin[3];
+  image->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
+  const double* spacing = image->GetSpacing();
+  vtkMatrix3x3* d = image->GetDirectionMatrix();
+  for (int r = 0; r < 3; ++r)
+  {
+    g.origin[r] = origin[r];
+    g.spacing[r] = spacing[r];
+    for (int c = 0; c < 3; ++c)
+    {
+      g.direction(r, c) = d->GetElement(r, c);
+    }
+  }
+  const vtkIdType n = scalars->GetNumberOfTuples();
+  if (n != static_cast<vtkIdType>(g.voxelCount()))
+  {
+    return false;
+  }
+  volume.data.resize(static_cast<std::size_t>(n));
+  for (vtkIdType p = 0; p < n; ++p)
+  {
+    volume.data[static_cast<std::size_t>(p)] = static_cast<T>(scalars->GetComponent(p, 0));
+  }
+  return true;
+}
+
+vtkSmartPointer<vtkImageData> ToImage(const repose::MaskVolume& mask)
+{
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  const auto& g = mask.grid;
+  image->SetExtent(0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1);
+  image->SetOrigin(g.origin.data());
+  image->SetSpacing(g.spacing.data());
+  double d[9];
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      d[3 * r + c] = g.direction(r, c);
+    }
+  }
+  image->SetDirectionMatrix(d);
+  vtkNew<vtkUnsignedCharArray> values;
+  values->SetName("Mask");
+  values->SetNumberOfTuples(static_cast<vtkIdType>(mask.data.size()));
+  std::copy(mask.data.begin(), mask.data.end(), values->GetPointer(0));
+  image->GetPointData()->SetScalars(values);
+  return image;
+}
+
+void SetCellLabel(vtkPolyData* surface, int label)
+{
+  vtkNew<vtkIntArray> labels;
+  labels->SetName("Label");
+  labels->SetNumberOfTuples(surface->GetNumberOfCells());
+  labels->FillValue(label);
+  surface->GetCellData()->AddArray(labels);
+}
+}
+
+vtkReposeSurfaceExtractor::vtkReposeSurfaceExtractor()
+{
+  this->SetNumberOfInputPorts(2);
+}
+
+int vtkReposeSurfaceExtractor::FillInputPortInformation(int port, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  if (port == 1)
+  {
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+  }
+  return 1;
+}
+
+void vtkReposeSurfaceExtractor::SetIntensityData(vtkImageData* image)
+{
+  this->SetInputData(1, image);
+}
+
+int vtkReposeSurfaceExtractor::ContourMask(vtkImageData* mask, double meshingSpacing,
+  int smoothingIterations, double passBand, double targetReduction, vtkPolyData* output)
+{
+  if (!mask || !output || !mask->GetPointData()->GetScalars())
+  {
+    return 0;
+  }
+  // The same voxels in the axis-aligned index frame: point = spacing * ijk.
+  vtkNew<vtkImageData> local;
+  local->ShallowCopy(mask);
+  local->SetOrigin(0, 0, 0);
+  local->SetDirectionMatrix(1, 0, 0, 0, 1, 0, 0, 0, 1);
+
+  vtkSmartPointer<vtkImageData> volume = local;
+  bool resampled = false;
+  const double* spacing = mask->GetSpacing();
+  if (meshingSpacing > 0 &&
+    meshingSpacing > 1.01 * std::min({ spacing[0], spacing[1], spacing[2] }))
+  {
+    // Antialiased (sinc) resampling of the 0/1 mask as float; contoured at 0.5 below.
+    vtkNew<vtkImageCast> toFloat;
+    toFloat->SetInputData(local);
+    toFloat->SetOutputScalarTypeToFloat();
+    vtkNew<vtkImageResize> resize;
+    resize->SetInputConnection(toFloat->GetOutputPort());
+    resize->SetResizeMethodToOutputSpacing();
+    resize->SetOutputSpacing(std::max(meshingSpacing, spacing[0]), std::max(meshingSpacing, spacing[1]),
+      std::max(meshingSpacing, spacing[2]));
+    resize->InterpolateOn();
+    resize->Update();
+    volume = resize->GetOutput();
+    resampled = true;
+  }
+
+  // A background layer all around so the surface closes where the mask touches the image border.
+  int ext[6];
+  volume->GetExtent(ext);
+  vtkNew<vtkImageConstantPad> pad;
+  pad->SetInputData(volume);
+  pad->SetConstant(0);
+  pad->SetOutputWholeExtent(ext[0] - 1, ext[1] + 1, ext[2] - 1, ext[3] + 1, ext[4] - 1, ext[5] + 1);
+  pad->Update();
+
+  vtkSmartPointer<vtkPolyData> surface;
+  if (resampled)
+  {
+    vtkNew<vtkFlyingEdges3D> contour;
+    contour->SetInputConnection(pad->GetOutputPort());
+    contour->SetValue(0, 0.5);
+    contour->ComputeNormalsOff();
+    contour->ComputeGradientsOff();
+    contour->ComputeScalarsOff();
+    contour->Update();
+    surface = contour->GetOutput();
+  }
+  else
+  {
+    // Non-zero voxels as 1 so that any mask values work with the discrete contour.
+    vtkNew<vtkImageData> binary;
+    binary->CopyStructure(pad->GetOutput());
+    vtkDataArray* in = pad->GetOutput()->GetPointData()->GetScalars();
+    vtkNew<vtkUnsignedCharArray> values;
+    values->SetNumberOfTuples(in->GetNumberOfTuples());
+    for (vtkIdType p = 0; p < in->GetNumberOfTuples(); ++p)
+    {
+      values->SetValue(p, in->GetComponent(p, 0) != 0 ? 1 : 0);
+    }
+    binary->GetPointData()->SetScalars(values);
+    vtkNew<vtkDiscreteFlyingEdges3D> contour;
+    contour->SetInputData(binary);
+    contour->SetValue(0, 1);
+    contour->ComputeNormalsOff();
+    contour->ComputeGradientsOff();
+    contour->ComputeScalarsOff();
+    contour->Update();
+    surface = contour->GetOutput();
+  }
+  if (surface->GetNumberOfCells() == 0)
+  {
+    output->Initialize();
+    return 0;
+  }
+
+  if (smoothingIterations > 0)
+  {
+    vtkNew<vtkWindowedSincPolyDataFilter> smooth;
+    smooth->SetInputData(surface);
+    smooth->SetNumberOfIterations(smoothingIterations);
+    smooth->SetPassBand(passBand);
+    smooth->NormalizeCoordinatesOn();
+    smooth->BoundarySmoothingOff();
+    smooth->FeatureEdgeSmoothingOff();
+    smooth->NonManifoldSmoothingOff();
+    smooth->Update();
+    surface = smooth->GetOutput();
+  }
+  if (targetReduction > 0)
+  {
+    vtkNew<vtkQuadricDecimation> decimate;
+    decimate->SetInputData(surface);
+    decimate->SetTargetReduction(targetReduction);
+    decimate->VolumePreservationOn();
+    decimate->Update();
+    surface = decimate->GetOutput();
+  }
+
+  // Index frame -> physical: x = origin + direction * local.
+  vtkNew<vtkMatrix4x4> m;
+  vtkMatrix3x3* d = mask->GetDirectionMatrix();
+  const double* origin = mask->GetOrigin();
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      m->SetElement(r, c, d->GetElement(r, c));
+    }
+    m->SetElement(r, 3, origin[r]);
+  }
+  vtkNew<vtkTransform> transform;
+  transform->SetMatrix(m);
+  vtkNew<vtkTransformPolyDataFilter> toPhysical;
+  toPhysical->SetInputData(surface);
+  toPhysical->SetTransform(transform);
+  toPhysical->SetOutputPointsPrecision(vtkAlgorithm::DOUBLE_PRECISION);
+  toPhysical->Update();
+  output->ShallowCopy(toPhysical->GetOutput());
+  return 1;
+}
+
+int vtkReposeSurfaceExtractor::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkImageData* labelImage = vtkImageData::GetData(inputVector[0]);
+  vtkImageData* intensityImage =
+    inputVector[1]->GetNumberOfInformationObjects() > 0 ? vtkImageData::GetData(inputVector[1]) : nullptr;
+  vtkPolyData* output = vtkPolyData::GetData(outputVector);
+  if (!labelImage || !labelImage->GetPointData()->GetScalars())
+  {
+    vtkErrorMacro("the label image (input 0) has no scalars");
+    return 0;
+  }
+  try
+  {
+    repose::LabelVolume labels;
+    if (!ToVolume(labelImage, labels))
+    {
+      vtkErrorMacro("the label image must have one scalar component per voxel");
+      return 0;
+    }
+    repose::IntensityVolume intensity;
+    if (intensityImage && !ToVolume(intensityImage, intensity))
+    {
+      vtkErrorMacro("the intensity image (input 1) must have one scalar component per voxel");
+      return 0;
+    }
+    vtkNew<vtkAppendPolyData> append;
+    int pieces = 0;
+    auto addSurface = [&](vtkImageData* mask, int label) {
+      vtkNew<vtkPolyData> surface;
+      if (!ContourMask(mask, 0, this->SmoothingIterations, this->PassBand, this->TargetReduction, surface))
+      {
+        vtkWarningMacro("no surface for label " << label);
+        return;
+      }
+      vtkNew<vtkPolyDataNormals> normals;
+      normals->SetInputData(surface);
+      normals->SplittingOff();
+      normals->ConsistencyOn();
+      normals->AutoOrientNormalsOn();
+      normals->ComputePointNormalsOn();
+      normals->ComputeCellNormalsOff();
+      normals->Update();
+      vtkPolyData* withNormals = normals->GetOutput();
+      SetCellLabel(withNormals, label);
+      append->AddInputData(withNormals);
+      ++pieces;
+    };
+
+    if (this->ExtractSkin)
+    {
+      repose::BodyMaskOptions options;
+      options.bodyThreshold = this->BodyThreshold;
+      const repose::MaskVolume body =
+        repose::bodyMask(labels, intensityImage ? &intensity : nullptr, options);
+      addSurface(ToImage(body), SkinLabel);
+    }
+    if (this->ExtractBones)
+    {
+      if (this->SkeletonJSON.empty())
+      {
+        vtkErrorMacro("SkeletonJSON is empty: the bone labels come from the skeleton");
+        return 0;
+      }
+      const repose::Skeleton skeleton = repose::parseSkeletonJson(this->SkeletonJSON);
+      // Bounding box of every label in one pass, so each bone is contoured on its own crop.
+      std::map<int, std::array<int, 6>> boxes;
+      for (const auto& joint : skeleton.joints)
+      {
+        for (int label : joint.labels)
+        {
+          boxes[label] = { std::numeric_limits<int>::max(), -1, std::numeric_limits<int>::max(), -1,
+            std::numeric_limits<int>::max(), -1 };
+        }
+      }
+      const auto& dims = labels.grid.dims;
+      for (int k = 0; k < dims[2]; ++k)
+      {
+        for (int j = 0; j < dims[1]; ++j)
+        {
+          for (int i = 0; i < dims[0]; ++i)
+          {
+            auto it = boxes.find(labels.at(i, j, k));
+            if (it == boxes.end())
+            {
+              continue;
+            }
+            auto& b = it->second;
+            b = { std::min(b[0], i), std::max(b[1], i), std::min(b[2], j), std::max(b[3], j),
+              std::min(b[4], k), std::max(b[5], k) };
+          }
+        }
+      }
+      for (const auto& [label, b] : boxes)
+      {
+        if (b[1] < 0)
+        {
+          vtkWarningMacro("bone label " << label << " does not occur in the label image");
+          continue;
+        }
+        repose::MaskVolume crop;
+        crop.grid = labels.grid;
+        crop.grid.dims = { b[1] - b[0] + 1, b[3] - b[2] + 1, b[5] - b[4] + 1 };
+        crop.grid.origin = labels.grid.indexToPhysical(Eigen::Vector3d(b[0], b[2], b[4]));
+        crop.data.resize(crop.grid.voxelCount());
+        for (int k = b[4]; k <= b[5]; ++k)
+        {
+          for (int j = b[2]; j <= b[3]; ++j)
+          {
+            for (int i = b[0]; i <= b[1]; ++i)
+            {
+              crop.at(i - b[0], j - b[2], k - b[4]) = labels.at(i, j, k) == label ? 1 : 0;
+            }
+          }
+        }
+        addSurface(ToImage(crop), label);
+      }
+    }
+    if (pieces == 0)
+    {
+      vtkErrorMacro("no surface was extracted");
+      return 0;
+    }
+    append->Update();
+    output->ShallowCopy(append->GetOutput());
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  return 1;
+}
+
+void vtkReposeSurfaceExtractor::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "SkeletonJSON: " << (this->SkeletonJSON.empty() ? "(empty)" : "(set)") << "\n";
+  os << indent << "BodyThreshold: " << this->BodyThreshold << "\n";
+  os << indent << "ExtractSkin: " << this->ExtractSkin << "\n";
+  os << indent << "ExtractBones: " << this->ExtractBones << "\n";
+  os << indent << "SmoothingIterations: " << this->SmoothingIterations << "\n";
+  os << indent << "PassBand: " << this->PassBand << "\n";
+  os << indent << "TargetReduction: " << this->TargetReduction << "\n";
+}

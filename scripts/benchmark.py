@@ -1,0 +1,125 @@
+#!/usr/bin/python3
+"""Repose benchmark: per-stage time and peak memory on the built-in phantom, with voxel, node and tet
+counts, and the per-pose costs (skinning the nodes, moving the surfaces, pulling the posed volume).
+
+usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark.py [--sizes small,medium,large]
+       [--repose build/bin/repose] [--work DIR] [--poses N]
+Prints a Markdown table. Preprocessing is timed through the CLI (as a user runs it), posing through
+the Python-wrapped filters so that repeated poses reuse the loaded case as an interactive tool does."""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def run_measured(cmd):
+    """Runs a command; returns (stdout, seconds, peak resident MiB) of that process alone."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    out, err = p.communicate()
+    seconds = time.perf_counter() - t0
+    # ru_maxrss of the children waited so far; each stage runs in its own measuring subprocess.
+    if p.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{out}\n{err}")
+    return out, seconds
+
+
+def measured_subprocess(cmd):
+    code = ("import resource, subprocess, sys, time\n"
+            "t = time.perf_counter(); p = subprocess.run(sys.argv[1:], capture_output=True, text=True)\n"
+            "dt = time.perf_counter() - t\n"
+            "sys.stdout.write(p.stdout); sys.stderr.write(p.stderr)\n"
+            "print('@@', dt, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
+            "sys.exit(p.returncode)\n")
+    out, _ = run_measured([sys.executable, "-c", code, *cmd])
+    m = re.search(r"@@ (\S+) (\d+)", out)
+    return out, float(m.group(1)), int(m.group(2)) / 1024.0
+
+
+def stage_times(out):
+    return {m.group(1): float(m.group(2)) for m in re.finditer(r"^\s+(\S[^\n]*?)\s+([0-9.]+) s$", out, re.M)}
+
+
+def pose_costs(case, poses):
+    """Loads a prepared case in the filters and times `poses` different poses."""
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLUnstructuredGridReader
+    from repose import (vtkReposeImageReader, vtkReposePosedVolume, vtkReposeSkinning,
+                        vtkReposeSurfaceDeformer)
+    mr = vtkXMLUnstructuredGridReader()
+    mr.SetFileName(f"{case}/mesh.vtu")
+    mr.Update()
+    sr = vtkXMLPolyDataReader()
+    sr.SetFileName(f"{case}/surfaces.vtp")
+    sr.Update()
+    lr = vtkReposeImageReader()
+    lr.SetFileName(f"{case}/labels.nii.gz")
+    lr.Update()
+    skeleton = open(f"{case}/skeleton.json").read()
+    sk = vtkReposeSkinning()
+    sk.SetInputConnection(mr.GetOutputPort())
+    sk.SetSkeletonJSON(skeleton)
+    de = vtkReposeSurfaceDeformer()
+    de.SetInputConnection(0, sr.GetOutputPort())
+    de.SetInputConnection(1, sk.GetOutputPort())
+    vo = vtkReposePosedVolume()
+    vo.SetInputConnection(0, lr.GetOutputPort())
+    vo.SetInputConnection(1, mr.GetOutputPort())
+    vo.SetInputConnection(2, sk.GetOutputPort())
+    vo.SetInterpolationToNearest()
+    skin, surf, vol, voxels = [], [], [], 0
+    for i in range(poses + 1):
+        a = 10 + 50 * i / max(poses, 1)
+        sk.SetPoseJSON(json.dumps({"rotations": {
+            "left_hip": {"axis": [1, 0, 0], "degrees": -a}, "left_knee": {"axis": [1, 0, 0], "degrees": a},
+            "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}}))
+        t = time.perf_counter(); sk.Update(); t1 = time.perf_counter()
+        de.Update(); t2 = time.perf_counter()
+        vo.Update(); t3 = time.perf_counter()
+        if i == 0:
+            continue  # first pose pays one-off costs (weights conversion, binding cache)
+        skin.append(t1 - t); surf.append(t2 - t1); vol.append(t3 - t2)
+        voxels = vo.GetOutput().GetNumberOfPoints()
+    med = lambda v: sorted(v)[len(v) // 2]
+    return med(skin), med(surf), med(vol), voxels, sr.GetOutput().GetNumberOfPoints()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="small,medium,large")
+    ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
+    ap.add_argument("--work", default=None)
+    ap.add_argument("--poses", type=int, default=5)
+    args = ap.parse_args()
+    work = args.work or tempfile.mkdtemp(prefix="repose-bench-")
+    rows = []
+    for size in args.sizes.split(","):
+        d = os.path.join(work, size)
+        out, t_ph, _ = measured_subprocess([args.repose, "phantom", "--size", size, "--out", f"{d}/phantom"])
+        dims = re.search(r"(\d+)x(\d+)x(\d+) voxels", out).groups()
+        voxels = int(dims[0]) * int(dims[1]) * int(dims[2])
+        out, t_prep, mem = measured_subprocess([args.repose, "prepare", "--labels", f"{d}/phantom/labels.nii.gz",
+                                                "--skeleton", f"{d}/phantom/skeleton.json", "--out", f"{d}/case"])
+        st = stage_times(out)
+        m = re.search(r"tet mesh: (\d+) nodes, (\d+) tets", out)
+        nodes, tets = int(m.group(1)), int(m.group(2))
+        skin, surf, vol, outvox, surfverts = pose_costs(f"{d}/case", args.poses)
+        rows.append((size, "x".join(dims), voxels, nodes, tets, surfverts, st.get("mesh", 0), st.get("weights", 0),
+                     st.get("surfaces", 0), st.get("binding", 0), t_prep, mem, skin * 1e3, surf * 1e3,
+                     vol * 1e3, outvox / vol / 1e6))
+        print(f"{size}: done", file=sys.stderr)
+    print("| size | voxels | nodes | tets | surface verts | mesh s | weights s | surfaces s | binding s |"
+          " prepare total s | prepare peak MiB | skin nodes ms | move surfaces ms | posed labels ms | Mvox/s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r[0]} | {r[1]} ({r[2] / 1e6:.1f} M) | {r[3]} | {r[4]} | {r[5]} | {r[6]:.1f} | {r[7]:.1f} | {r[8]:.1f} |"
+              f" {r[9]:.1f} | {r[10]:.1f} | {r[11]:.0f} | {r[12]:.1f} | {r[13]:.1f} | {r[14]:.0f} | {r[15]:.0f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages Repose builds and tests against. Safe to run again.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libvtk9-dev python3-vtk9 vtk9 libvtk9-qt-dev
+  libinsighttoolkit5-dev
+  libeigen3-dev libjsoncpp-dev
+  libtet1.5-dev
+  libopenvdb-dev libboost-iostreams-dev libtbb-dev
+  qtbase5-dev
+  libsuitesparse-dev libopenblas0-pthread
+  libgtest-dev googletest
+  python3-numpy python3-scipy
+  xvfb xauth
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all packages present"
+  exit 0
+fi
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

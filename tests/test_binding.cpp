@@ -1,0 +1,180 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <random>
+
+#include "barycentric_binding.h"
+#include "tet_locator.h"
+#include "tet_mesh.h"
+
+namespace {
+
+using repose::Points;
+using repose::Tets;
+
+// Box [lo, hi] split into n cubes per axis, each cut into 6 Kuhn tets (conforming faces), positively oriented.
+void boxMesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const std::array<int, 3>& n, Points& V,
+             Tets& T) {
+  const int sx = n[0] + 1, sy = n[1] + 1, sz = n[2] + 1;
+  V.resize(std::size_t(sx) * sy * sz, 3);
+  auto id = [&](int i, int j, int k) { return (k * sy + j) * sx + i; };
+  for (int k = 0; k < sz; ++k)
+    for (int j = 0; j < sy; ++j)
+      for (int i = 0; i < sx; ++i) {
+        const Eigen::Vector3d f(double(i) / n[0], double(j) / n[1], double(k) / n[2]);
+        V.row(id(i, j, k)) = (lo + (hi - lo).cwiseProduct(f)).transpose();
+      }
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  T.resize(std::size_t(n[0]) * n[1] * n[2] * 6, 4);
+  int t = 0;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        for (const auto& p : perms) {
+          int c[3] = {i, j, k};
+          int row[4];
+          row[0] = id(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[p[s]];
+            row[s + 1] = id(c[0], c[1], c[2]);
+          }
+          if (repose::tetVolume(V.row(row[0]).transpose(), V.row(row[1]).transpose(), V.row(row[2]).transpose(),
+                                V.row(row[3]).transpose()) < 0)
+            std::swap(row[2], row[3]);
+          T.row(t++) << row[0], row[1], row[2], row[3];
+        }
+}
+
+// A mildly irregular mesh: the box lattice with interior nodes jittered (tets stay positive).
+void jitteredMesh(Points& V, Tets& T) {
+  boxMesh(Eigen::Vector3d(-2, -1, 0), Eigen::Vector3d(3, 2, 4), {6, 5, 7}, V, T);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.08, 0.08);
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    const Eigen::RowVector3d x = V.row(v);
+    const bool boundary = x.x() < -1.99 || x.x() > 2.99 || x.y() < -0.99 || x.y() > 1.99 || x.z() < 0.01 ||
+                          x.z() > 3.99;
+    if (!boundary) V.row(v) += Eigen::RowVector3d(u(rng), u(rng), u(rng));
+  }
+}
+
+Points randomPoints(int n, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  Points P(n, 3);
+  for (int p = 0; p < n; ++p)
+    P.row(p) = (lo + (hi - lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)))).transpose();
+  return P;
+}
+
+}  // namespace
+
+TEST(Binding, RoundTripInsideMesh) {
+  Points V;
+  Tets T;
+  jitteredMesh(V, T);
+  const Points P = randomPoints(5000, {-1.9, -0.9, 0.1}, {2.9, 1.9, 3.9}, 1);
+  const repose::Binding b = repose::bindPoints(V, T, P);
+  EXPECT_EQ(b.outsideCount, 0u);
+  ASSERT_EQ(b.tet.size(), 5000u);
+  for (int p = 0; p < 5000; ++p) {
+    EXPECT_NEAR(b.bary.row(p).sum(), 1.0f, 1e-5f);
+    EXPECT_GE(b.bary.row(p).minCoeff(), -1e-5f);
+  }
+  Points Q;
+  repose::applyBinding(b, T, V, Q);
+  EXPECT_LT((Q - P).cwiseAbs().maxCoeff(), 1e-5);
+}
+
+TEST(Binding, RigidMotionMovesPointsRigidly) {
+  Points V;
+  Tets T;
+  jitteredMesh(V, T);
+  const Points P = randomPoints(2000, {-1.9, -0.9, 0.1}, {2.9, 1.9, 3.9}, 2);
+  const repose::Binding b = repose::bindPoints(V, T, P);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(1.1, Eigen::Vector3d(-1, 2, 0.5).normalized()).toRotationMatrix();
+  const Eigen::RowVector3d t(10, -3, 4);
+  const Points Vm = (V * R.transpose()).rowwise() + t;
+  Points Q;
+  repose::applyBinding(b, T, Vm, Q);
+  const Points expected = (P * R.transpose()).rowwise() + t;
+  EXPECT_LT((Q - expected).cwiseAbs().maxCoeff(), 1e-5);
+}
+
+TEST(Binding, OutsidePointsBindToNearestTetAndFollowAffineMaps) {
+  Points V;
+  Tets T;
+  boxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(4, 3, 5), {4, 3, 5}, V, T);
+  // Points around the box, some far, plus a few inside.
+  Points P(8, 3);
+  P << -0.5, 1.5, 2.5,   // near face x=0
+      4.7, 2.9, 4.9,     // near corner
+      2.0, -1.0, 6.0,    // near an edge
+      10, 10, 10,        // far
+      1.2, 1.3, 1.4,     // inside
+      3.9, 0.1, 2.2,     // inside
+      2.0, 1.5, -3.0,    // below
+      -5, -6, 20;        // far
+  const repose::Binding b = repose::bindPoints(V, T, P);
+  EXPECT_EQ(b.outsideCount, 6u);
+  const repose::TetLocator loc(V, T);
+  // The bound tet is (one of) the nearest: no tet is closer than it.
+  for (int p = 0; p < P.rows(); ++p) {
+    const Eigen::Vector3d x = P.row(p).transpose();
+    const double d = loc.distanceToTet(b.tet[p], x);
+    double brute = 1e300;
+    for (int t = 0; t < T.rows(); ++t) brute = std::min(brute, loc.distanceToTet(t, x));
+    EXPECT_NEAR(d, brute, 1e-9) << "point " << p;
+    // Distance to the box, computed directly.
+    const Eigen::Vector3d lo(0, 0, 0), hi(4, 3, 5);
+    EXPECT_NEAR(d, (lo - x).cwiseMax(x - hi).cwiseMax(0.0).norm(), 1e-9) << "point " << p;
+  }
+  // Under an affine map of the nodes, every bound point (inside or extrapolated) follows it exactly.
+  Eigen::Matrix3d A;
+  A << 1.2, 0.3, -0.1, 0.05, 0.9, 0.2, -0.3, 0.1, 1.4;
+  const Eigen::RowVector3d t(1, 2, -3);
+  const Points Va = (V * A.transpose()).rowwise() + t;
+  Points Q;
+  repose::applyBinding(b, T, Va, Q);
+  const Points expected = (P * A.transpose()).rowwise() + t;
+  EXPECT_LT((Q - expected).cwiseAbs().maxCoeff(), 1e-4);  // float barycentrics, |x| up to ~25
+}
+
+TEST(Binding, LocatorAgreesWithBruteForce) {
+  Points V;
+  Tets T;
+  jitteredMesh(V, T);
+  const repose::TetLocator loc(V, T);
+  const Points P = randomPoints(500, {-3, -2, -1}, {4, 3, 5}, 3);
+  for (int p = 0; p < P.rows(); ++p) {
+    const Eigen::Vector3d x = P.row(p).transpose();
+    bool insideBrute = false;
+    double brute = 1e300;
+    for (int t = 0; t < T.rows(); ++t) {
+      insideBrute = insideBrute || loc.barycentric(t, x).minCoeff() >= 0;
+      brute = std::min(brute, loc.distanceToTet(t, x));
+    }
+    repose::TetLocator::Hit hit;
+    const bool inside = loc.findContaining(x, hit);
+    if (insideBrute) EXPECT_TRUE(inside) << p;
+    if (inside) EXPECT_GE(hit.bary.minCoeff(), -1e-9);
+    const repose::TetLocator::Hit near = loc.findNearest(x);
+    EXPECT_NEAR(near.distance, brute, 1e-12) << p;
+    EXPECT_LT((loc.barycentric(near.tet, x) - near.bary).norm(), 1e-12);
+  }
+}
+
+TEST(Binding, BadInputThrows) {
+  Points V;
+  Tets T;
+  boxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1), {1, 1, 1}, V, T);
+  Tets bad = T;
+  bad(0, 1) = 99;
+  const Points P = randomPoints(3, {0, 0, 0}, {1, 1, 1}, 4);
+  EXPECT_THROW(repose::bindPoints(V, bad, P), std::invalid_argument);
+  EXPECT_THROW(repose::bindPoints(V, Tets(0, 4), P), std::invalid_argument);
+  repose::Binding b = repose::bindPoints(V, T, P);
+  b.tet[1] = 1000;
+  Points Q;
+  EXPECT_THROW(repose::applyBinding(b, T, V, Q), std::invalid_argument);
+}

@@ -1,0 +1,375 @@
+// Volumetrization: body mask, outer-layer peel, TetGen tetrahedralization, bone tagging.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+#include "body_mask.h"
+#include "mesh_tagging.h"
+#include "tet_mesher.h"
+
+using namespace repose;
+
+namespace {
+
+ImageGrid makeGrid(int nx, int ny, int nz) {
+  ImageGrid g;
+  g.dims = {nx, ny, nz};
+  g.origin = {5, -3, 12};
+  g.spacing = {1.0, 1.5, 2.0};
+  g.direction << -1, 0, 0, 0, -1, 0, 0, 0, 1;
+  return g;
+}
+
+LabelVolume makeLabels(const ImageGrid& g) {
+  LabelVolume v;
+  v.grid = g;
+  v.data.assign(g.voxelCount(), 0);
+  return v;
+}
+
+std::size_t countOnes(const MaskVolume& m) {
+  std::size_t n = 0;
+  for (auto x : m.data) n += x ? 1 : 0;
+  return n;
+}
+
+// Closed axis-aligned box surface: 8 points, 12 outward triangles.
+void addBox(Points& V, Triangles& F, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const int base = int(V.rows());
+  V.conservativeResize(base + 8, 3);
+  for (int c = 0; c < 8; ++c)
+    V.row(base + c) << ((c & 1) ? hi.x() : lo.x()), ((c & 2) ? hi.y() : lo.y()), ((c & 4) ? hi.z() : lo.z());
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const int f0 = int(F.rows());
+  F.conservativeResize(f0 + 12, 3);
+  for (int q = 0; q < 6; ++q) {
+    F.row(f0 + 2 * q) << base + quads[q][0], base + quads[q][1], base + quads[q][2];
+    F.row(f0 + 2 * q + 1) << base + quads[q][0], base + quads[q][2], base + quads[q][3];
+  }
+}
+
+void expectPositive(const TetMesh& m) {
+  for (Eigen::Index t = 0; t < m.tets.rows(); ++t)
+    ASSERT_GT(tetVolume(m.nodes.row(m.tets(t, 0)), m.nodes.row(m.tets(t, 1)), m.nodes.row(m.tets(t, 2)),
+                        m.nodes.row(m.tets(t, 3))),
+              0.0)
+        << "tet " << t;
+}
+
+bool hasNode(const TetMesh& m, const Eigen::Vector3d& p, double tol = 1e-9) {
+  for (Eigen::Index v = 0; v < m.nodes.rows(); ++v)
+    if ((m.nodes.row(v).transpose() - p).norm() < tol) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(BodyMask, HollowBallIsFilled) {
+  const auto g = makeGrid(24, 24, 24);
+  auto labels = makeLabels(g);
+  std::size_t shell = 0, ball = 0;
+  for (int k = 0; k < 24; ++k)
+    for (int j = 0; j < 24; ++j)
+      for (int i = 0; i < 24; ++i) {
+        const double r = std::sqrt((i - 11.5) * (i - 11.5) + (j - 11.5) * (j - 11.5) + (k - 11.5) * (k - 11.5));
+        if (r <= 9) ++ball;
+        if (r <= 9 && r > 6) {
+          labels.at(i, j, k) = 3;
+          ++shell;
+        }
+      }
+  const auto mask = bodyMask(labels, nullptr, {});
+  EXPECT_EQ(countOnes(mask), ball);
+  EXPECT_TRUE(mask.grid.sameGridAs(g));
+  BodyMaskOptions noFill;
+  noFill.fillHoles = false;
+  EXPECT_EQ(countOnes(bodyMask(labels, nullptr, noFill)), shell);
+}
+
+TEST(BodyMask, SliceFillClosesCavityOpenAlongK) {
+  // A tube along k, open at both ends: no 3-D hole, but each k-slice has a hole.
+  const auto g = makeGrid(12, 12, 8);
+  auto labels = makeLabels(g);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 2; j < 10; ++j)
+      for (int i = 2; i < 10; ++i)
+        if (i == 2 || i == 9 || j == 2 || j == 9) labels.at(i, j, k) = 1;
+  EXPECT_EQ(countOnes(bodyMask(labels, nullptr, {})), std::size_t(8 * 8 * 8));
+}
+
+TEST(BodyMask, KeepsLargestComponent) {
+  const auto g = makeGrid(20, 10, 10);
+  auto labels = makeLabels(g);
+  for (int k = 2; k < 6; ++k)
+    for (int j = 2; j < 6; ++j) {
+      for (int i = 1; i < 4; ++i) labels.at(i, j, k) = 5;   // 48 voxels
+      for (int i = 6; i < 14; ++i) labels.at(i, j, k) = 7;  // 128 voxels
+    }
+  labels.at(18, 8, 8) = 2;  // diagonal-free single voxel
+  const auto mask = bodyMask(labels, nullptr, {});
+  EXPECT_EQ(countOnes(mask), std::size_t(128));
+  EXPECT_EQ(mask.at(6, 2, 2), 1);
+  EXPECT_EQ(mask.at(1, 2, 2), 0);
+  BodyMaskOptions all;
+  all.keepLargestComponent = false;
+  EXPECT_EQ(countOnes(bodyMask(labels, nullptr, all)), std::size_t(48 + 128 + 1));
+}
+
+TEST(BodyMask, UnitesCtAboveThreshold) {
+  const auto g = makeGrid(16, 8, 8);
+  auto labels = makeLabels(g);
+  IntensityVolume ct;
+  ct.grid = g;
+  ct.data.assign(g.voxelCount(), -1000.f);
+  for (int k = 2; k < 6; ++k)
+    for (int j = 2; j < 6; ++j) {
+      for (int i = 2; i < 6; ++i) labels.at(i, j, k) = 1;
+      for (int i = 6; i < 10; ++i) ct.at(i, j, k) = 40.f;     // soft tissue, unlabelled
+      for (int i = 10; i < 12; ++i) ct.at(i, j, k) = -600.f;  // below threshold
+    }
+  BodyMaskOptions opt;
+  opt.bodyThreshold = -500;
+  const auto mask = bodyMask(labels, &ct, opt);
+  EXPECT_EQ(countOnes(mask), std::size_t(8 * 4 * 4));
+  EXPECT_EQ(mask.at(9, 3, 3), 1);
+  EXPECT_EQ(mask.at(10, 3, 3), 0);
+  opt.bodyThreshold = -700;
+  EXPECT_EQ(countOnes(bodyMask(labels, &ct, opt)), std::size_t(10 * 4 * 4));
+}
+
+TEST(BodyMask, BadInputThrows) {
+  const auto g = makeGrid(8, 8, 8);
+  auto labels = makeLabels(g);
+  EXPECT_THROW(bodyMask(labels, nullptr, {}), std::invalid_argument);  // empty
+  labels.at(3, 3, 3) = 1;
+  IntensityVolume ct;
+  ct.grid = g;
+  ct.grid.spacing.x() = 1.1;
+  ct.data.assign(g.voxelCount(), 0.f);
+  EXPECT_THROW(bodyMask(labels, &ct, {}), std::invalid_argument);
+  ct.grid = g;
+  ct.grid.direction = Eigen::Matrix3d::Identity();
+  EXPECT_THROW(bodyMask(labels, &ct, {}), std::invalid_argument);
+  ct.grid = g;
+  ct.data.resize(10);
+  EXPECT_THROW(bodyMask(labels, &ct, {}), std::invalid_argument);
+  labels.data.resize(5);
+  EXPECT_THROW(bodyMask(labels, nullptr, {}), std::invalid_argument);
+}
+
+namespace {
+// Two 6x6x6 boxes along i starting at i0=2, separated by `gap` voxels.
+MaskVolume twoBoxes(int gap) {
+  MaskVolume m;
+  m.grid = makeGrid(24, 10, 10);
+  m.data.assign(m.grid.voxelCount(), 0);
+  for (int k = 2; k < 8; ++k)
+    for (int j = 2; j < 8; ++j)
+      for (int i = 0; i < 6; ++i) {
+        m.at(2 + i, j, k) = 1;
+        m.at(8 + gap + i, j, k) = 1;
+      }
+  return m;
+}
+}  // namespace
+
+TEST(PeelOuterLayer, ErodesOneLayerAndWidensGaps) {
+  const auto sep = peelOuterLayer(twoBoxes(1));
+  EXPECT_EQ(countOnes(sep), std::size_t(2 * 4 * 4 * 4));
+  // The one-voxel gap (i=8) grows to three voxels (i=7..9).
+  for (int i = 7; i <= 9; ++i) EXPECT_EQ(sep.at(i, 4, 4), 0) << i;
+  EXPECT_EQ(sep.at(6, 4, 4), 1);
+  EXPECT_EQ(sep.at(10, 4, 4), 1);
+  EXPECT_EQ(sep.at(3, 4, 4), 1);
+  EXPECT_EQ(sep.at(2, 4, 4), 0);
+
+  // Touching boxes form one 12x6x6 box: the contact face is interior and stays.
+  const auto touching = peelOuterLayer(twoBoxes(0));
+  EXPECT_EQ(countOnes(touching), std::size_t(10 * 4 * 4));
+  EXPECT_EQ(touching.at(7, 4, 4), 1);
+  EXPECT_EQ(touching.at(8, 4, 4), 1);
+
+  // Voxels on the image border are outer layer.
+  MaskVolume full;
+  full.grid = makeGrid(5, 5, 5);
+  full.data.assign(125, 1);
+  EXPECT_EQ(countOnes(peelOuterLayer(full)), std::size_t(27));
+}
+
+TEST(TetMesher, CubeWithSeeds) {
+  Points V(0, 3);
+  Triangles F(0, 3);
+  addBox(V, F, {-10, -5, 0}, {10, 15, 20});
+  Points seeds(3, 3);
+  seeds << 0, 5, 10, 2.5, 1.25, 3.75, 7, 9, 11;
+  TetMeshingOptions opt;
+  TetMeshingReport rep;
+  const TetMesh m = tetrahedralizeSurface(V, F, seeds, opt, &rep);
+  ASSERT_GT(m.tets.rows(), 0);
+  EXPECT_NEAR(meshVolume(m.nodes, m.tets), 8000.0, 8000.0 * 1e-9);
+  expectPositive(m);
+  for (Eigen::Index s = 0; s < seeds.rows(); ++s) EXPECT_TRUE(hasNode(m, seeds.row(s).transpose())) << s;
+  for (Eigen::Index v = 0; v < V.rows(); ++v) EXPECT_TRUE(hasNode(m, V.row(v).transpose())) << v;
+  EXPECT_EQ(rep.nodes, m.nodes.rows());
+  EXPECT_EQ(rep.tets, m.tets.rows());
+  EXPECT_EQ(rep.seedPoints, 3);
+  EXPECT_TRUE(m.fixedBone.empty());
+  // Every node is used by a tet.
+  std::vector<int> used(std::size_t(m.nodes.rows()), 0);
+  for (Eigen::Index t = 0; t < m.tets.rows(); ++t)
+    for (int c = 0; c < 4; ++c) used[m.tets(t, c)] = 1;
+  for (int u : used) EXPECT_EQ(u, 1);
+  // Inside-the-box nodes only.
+  EXPECT_GE(m.nodes.col(0).minCoeff(), -10 - 1e-9);
+  EXPECT_LE(m.nodes.col(2).maxCoeff(), 20 + 1e-9);
+}
+
+TEST(TetMesher, VolumeBoundAndOutsideSeedsIgnored) {
+  Points V(0, 3);
+  Triangles F(0, 3);
+  addBox(V, F, {0, 0, 0}, {10, 10, 10});
+  Points seeds(2, 3);
+  seeds << 5, 5, 5, 50, 50, 50;  // the second is outside: ignored
+  TetMeshingOptions opt;
+  opt.maxTetVolume = 2.0;
+  const TetMesh m = tetrahedralizeSurface(V, F, seeds, opt);
+  EXPECT_NEAR(meshVolume(m.nodes, m.tets), 1000.0, 1e-6);
+  EXPECT_GE(m.tets.rows(), 500);
+  for (Eigen::Index t = 0; t < m.tets.rows(); ++t)
+    EXPECT_LE(tetVolume(m.nodes.row(m.tets(t, 0)), m.nodes.row(m.tets(t, 1)), m.nodes.row(m.tets(t, 2)),
+                        m.nodes.row(m.tets(t, 3))),
+              2.0 + 1e-9);
+  EXPECT_TRUE(hasNode(m, Eigen::Vector3d(5, 5, 5)));
+  EXPECT_FALSE(hasNode(m, Eigen::Vector3d(50, 50, 50)));
+  EXPECT_LE(m.nodes.maxCoeff(), 10 + 1e-9);
+  expectPositive(m);
+}
+
+TEST(TetMesher, TwoDisjointCubes) {
+  Points V(0, 3);
+  Triangles F(0, 3);
+  addBox(V, F, {0, 0, 0}, {4, 4, 4});
+  addBox(V, F, {10, 0, 0}, {13, 3, 3});
+  // Reversed orientation of the second shell must not matter.
+  for (Eigen::Index f = 12; f < 24; ++f) std::swap(F(f, 1), F(f, 2));
+  const TetMesh m = tetrahedralizeSurface(V, F, Points(0, 3), {});
+  EXPECT_NEAR(meshVolume(m.nodes, m.tets), 64.0 + 27.0, 91.0 * 1e-9);
+  expectPositive(m);
+  // No tet spans the gap between the cubes.
+  for (Eigen::Index t = 0; t < m.tets.rows(); ++t) {
+    std::set<bool> side;
+    for (int c = 0; c < 4; ++c) side.insert(m.nodes(m.tets(t, c), 0) > 7);
+    EXPECT_EQ(side.size(), 1u);
+  }
+  // keepBoneComponents drops the cube without a bone node.
+  TetMesh tagged = m;
+  tagged.fixedBone.assign(std::size_t(m.nodes.rows()), -1);
+  tagged.tetLabel.assign(std::size_t(m.tets.rows()), 0);
+  for (Eigen::Index v = 0; v < m.nodes.rows(); ++v)
+    if (m.nodes(v, 0) > 7) {
+      tagged.fixedBone[v] = 2;
+      break;
+    }
+  const auto rep = keepBoneComponents(tagged);
+  EXPECT_EQ(rep.componentsKept, 1);
+  EXPECT_EQ(rep.componentsDropped, 1);
+  EXPECT_NEAR(meshVolume(tagged.nodes, tagged.tets), 27.0, 1e-9);
+  EXPECT_EQ(rep.nodesDropped + tagged.nodes.rows(), m.nodes.rows());
+  EXPECT_EQ(rep.tetsDropped + tagged.tets.rows(), m.tets.rows());
+  EXPECT_EQ(tagged.tetLabel.size(), std::size_t(tagged.tets.rows()));
+  EXPECT_EQ(std::count(tagged.fixedBone.begin(), tagged.fixedBone.end(), 2), 1);
+  EXPECT_GT(tagged.nodes.col(0).minCoeff(), 7);
+  // No bone node at all: nothing to keep.
+  TetMesh none = m;
+  none.fixedBone.assign(std::size_t(m.nodes.rows()), -1);
+  EXPECT_THROW(keepBoneComponents(none), std::invalid_argument);
+}
+
+TEST(TetMesher, BadSurfaceThrows) {
+  Points V(0, 3);
+  Triangles F(0, 3);
+  addBox(V, F, {0, 0, 0}, {1, 1, 1});
+  Triangles open = F.topRows(11);
+  EXPECT_THROW(tetrahedralizeSurface(V, open, Points(0, 3), {}), std::invalid_argument);
+  Triangles bad = F;
+  bad(0, 0) = 99;
+  EXPECT_THROW(tetrahedralizeSurface(V, bad, Points(0, 3), {}), std::invalid_argument);
+  TetMeshingOptions q;
+  q.radiusEdgeRatio = 0.9;
+  EXPECT_THROW(tetrahedralizeSurface(V, F, Points(0, 3), q), std::invalid_argument);
+  // Two boxes overlapping: the surface intersects itself; TetGen's error becomes a message.
+  Points V2 = V;
+  Triangles F2 = F;
+  addBox(V2, F2, {0.5, 0.25, 0.25}, {1.5, 0.75, 0.75});
+  try {
+    tetrahedralizeSurface(V2, F2, Points(0, 3), {});
+    ADD_FAILURE() << "self-intersecting surface accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("tet mesher"), std::string::npos);
+  }
+}
+
+TEST(MeshTagging, TwoBoneVolume) {
+  // Bone labels 20 (bone 0) and 21 (bone 1) inside soft tissue 3.
+  auto g = makeGrid(20, 8, 8);
+  auto labels = makeLabels(g);
+  for (int k = 1; k < 7; ++k)
+    for (int j = 1; j < 7; ++j)
+      for (int i = 1; i < 19; ++i) labels.at(i, j, k) = 3;
+  for (int k = 2; k < 6; ++k)
+    for (int j = 2; j < 6; ++j) {
+      for (int i = 2; i < 8; ++i) labels.at(i, j, k) = 20;
+      for (int i = 12; i < 18; ++i) labels.at(i, j, k) = 21;
+    }
+  std::vector<int> boneOfLabel(22, -1);
+  boneOfLabel[20] = 0;
+  boneOfLabel[21] = 1;
+  MaskVolume mask;
+  mask.grid = g;
+  mask.data.assign(g.voxelCount(), 1);
+
+  const Points seeds = boneSeedPoints(labels, boneOfLabel, mask, 2, 2);
+  ASSERT_GT(seeds.rows(), 0);
+  int perBone[2] = {0, 0};
+  for (Eigen::Index s = 0; s < seeds.rows(); ++s) {
+    const Eigen::Vector3d f = g.physicalToIndex(seeds.row(s).transpose());
+    const Eigen::Vector3d r = f.array().round();
+    EXPECT_LT((f - r).norm(), 1e-9);  // voxel centres
+    const int l = labels.at(int(r[0]), int(r[1]), int(r[2]));
+    ASSERT_TRUE(l == 20 || l == 21) << l;
+    ++perBone[boneOfLabel[l]];
+  }
+  EXPECT_GT(perBone[0], 4);
+  EXPECT_EQ(perBone[0], perBone[1]);  // the bones are copies translated by 5 lattice blocks
+  // Masked-out voxels give no seeds.
+  MaskVolume half = mask;
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 10; i < 20; ++i) half.at(i, j, k) = 0;
+  const Points seedsHalf = boneSeedPoints(labels, boneOfLabel, half, 2, 2);
+  for (Eigen::Index s = 0; s < seedsHalf.rows(); ++s) EXPECT_LT(g.physicalToIndex(seedsHalf.row(s).transpose())[0], 9.5);
+  EXPECT_THROW(boneSeedPoints(labels, boneOfLabel, mask, 0, 2), std::invalid_argument);
+
+  // Tag a hand-made mesh: nodes at known voxels (slightly off-centre), tets with known centroids.
+  TetMesh mesh;
+  mesh.nodes.resize(6, 3);
+  const double ijk[6][3] = {{3.2, 3, 3}, {14.4, 4, 4}, {10, 3, 3}, {0.3, 0, 0}, {25, 3, 3}, {7.4, 2, 5}};
+  for (int v = 0; v < 6; ++v) mesh.nodes.row(v) = g.indexToPhysical(Eigen::Vector3d(ijk[v][0], ijk[v][1], ijk[v][2])).transpose();
+  mesh.tets.resize(2, 4);
+  mesh.tets << 0, 5, 2, 3, 1, 2, 4, 0;
+  tagMesh(mesh, labels, boneOfLabel);
+  ASSERT_EQ(mesh.fixedBone.size(), 6u);
+  EXPECT_EQ(mesh.fixedBone[0], 0);
+  EXPECT_EQ(mesh.fixedBone[1], 1);
+  EXPECT_EQ(mesh.fixedBone[2], -1);
+  EXPECT_EQ(mesh.fixedBone[3], -1);  // background
+  EXPECT_EQ(mesh.fixedBone[4], -1);  // outside the grid: clamped to i=19, background
+  ASSERT_EQ(mesh.tetLabel.size(), 2u);
+  // Centroid of tet 0: i=(3.2+7.4+10+0.3)/4=5.225, j=2, k=2.75 -> voxel (5,2,3): bone label 20.
+  EXPECT_EQ(mesh.tetLabel[0], 20);
+  // Tet 1: i=(14.4+10+25+3.2)/4=13.15, j=k=3.25 -> voxel (13,3,3): label 21.
+  EXPECT_EQ(mesh.tetLabel[1], 21);
+}

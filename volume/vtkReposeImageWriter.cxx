@@ -1,0 +1,261 @@
+#include "vtkReposeImageWriter.h"
+
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkMatrix3x3.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+
+#include "itkImage.h"
+#include "itkImageFileWriter.h"
+#include "itkMetaImageIOFactory.h"
+#include "itkNiftiImageIOFactory.h"
+#include "itkNrrdImageIOFactory.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <unistd.h>
+
+vtkStandardNewMacro(vtkReposeImageWriter);
+
+namespace
+{
+namespace fs = std::filesystem;
+
+void RegisterItkFactories()
+{
+  static std::once_flag once;
+  std::call_once(once, [] {
+    itk::NiftiImageIOFactory::RegisterOneFactory();
+    itk::NrrdImageIOFactory::RegisterOneFactory();
+    itk::MetaImageIOFactory::RegisterOneFactory();
+  });
+}
+
+bool EndsWith(const std::string& s, const std::string& suffix)
+{
+  if (s.size() < suffix.size())
+  {
+    return false;
+  }
+  std::string tail = s.substr(s.size() - suffix.size());
+  std::transform(tail.begin(), tail.end(), tail.begin(), [](unsigned char c) { return std::tolower(c); });
+  return tail == suffix;
+}
+
+template <class T>
+void WriteWithItk(vtkImageData* input, const std::string& fileName, bool compress)
+{
+  using ImageType = itk::Image<T, 3>;
+  typename ImageType::Pointer image = ImageType::New();
+  int dims[3];
+  input->GetDimensions(dims);
+  typename ImageType::RegionType region;
+  typename ImageType::SpacingType spacing;
+  typename ImageType::PointType origin;
+  typename ImageType::DirectionType direction;
+  const double* o = input->GetOrigin();
+  const double* s = input->GetSpacing();
+  vtkMatrix3x3* d = input->GetDirectionMatrix();
+  int extent[6];
+  input->GetExtent(extent);
+  for (int a = 0; a < 3; ++a)
+  {
+    region.SetIndex(a, 0);
+    region.SetSize(a, static_cast<itk::SizeValueType>(dims[a]));
+    spacing[a] = s[a];
+    for (int b = 0; b < 3; ++b)
+    {
+      direction(a, b) = d->GetElement(a, b);
+    }
+  }
+  // A VTK extent not starting at 0 moves the first voxel: origin + D * diag(spacing) * extentStart.
+  for (int a = 0; a < 3; ++a)
+  {
+    double x = o[a];
+    for (int b = 0; b < 3; ++b)
+    {
+      x += d->GetElement(a, b) * s[b] * extent[2 * b];
+    }
+    origin[a] = x;
+  }
+  image->SetRegions(region);
+  image->SetSpacing(spacing);
+  image->SetOrigin(origin);
+  image->SetDirection(direction);
+  image->Allocate();
+  const T* src = static_cast<const T*>(input->GetPointData()->GetScalars()->GetVoidPointer(0));
+  std::copy(src, src + region.GetNumberOfPixels(), image->GetBufferPointer());
+
+  using WriterType = itk::ImageFileWriter<ImageType>;
+  typename WriterType::Pointer writer = WriterType::New();
+  writer->SetFileName(fileName);
+  writer->SetInput(image);
+  writer->SetUseCompression(compress);
+  writer->Update();
+}
+
+void WriteByType(vtkImageData* input, const std::string& fileName, bool compress)
+{
+  switch (input->GetScalarType())
+  {
+    case VTK_INT:
+      WriteWithItk<int>(input, fileName, compress);
+      break;
+    case VTK_SHORT:
+      WriteWithItk<short>(input, fileName, compress);
+      break;
+    case VTK_UNSIGNED_CHAR:
+      WriteWithItk<unsigned char>(input, fileName, compress);
+      break;
+    case VTK_FLOAT:
+      WriteWithItk<float>(input, fileName, compress);
+      break;
+    case VTK_DOUBLE:
+      WriteWithItk<double>(input, fileName, compress);
+      break;
+    default:
+      throw std::runtime_error(std::string("unsupported scalar type ") + input->GetScalarTypeAsString() +
+        " (use int, short, unsigned char, float or double)");
+  }
+}
+}
+
+vtkReposeImageWriter::vtkReposeImageWriter()
+{
+  this->SetNumberOfInputPorts(1);
+  this->SetNumberOfOutputPorts(0);
+}
+
+vtkReposeImageWriter::~vtkReposeImageWriter()
+{
+  this->SetFileName(nullptr);
+}
+
+int vtkReposeImageWriter::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  return 1;
+}
+
+int vtkReposeImageWriter::FillOutputPortInformation(int, vtkInformation*)
+{
+  return 1;
+}
+
+int vtkReposeImageWriter::Write()
+{
+  this->LastError.clear();
+  if (this->GetNumberOfInputConnections(0) < 1)
+  {
+    this->LastError = std::string(this->FileName ? this->FileName : "(no file name)") +
+      ": cannot write (no input)";
+    vtkErrorMacro(<< this->LastError);
+    return 0;
+  }
+  this->Modified();
+  this->Update();
+  return this->LastError.empty() ? 1 : 0;
+}
+
+int vtkReposeImageWriter::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
+{
+  vtkImageData* input = vtkImageData::GetData(inputVector[0]);
+  return this->WriteImage(input);
+}
+
+int vtkReposeImageWriter::WriteImage(vtkImageData* input)
+{
+  const std::string target = this->FileName ? this->FileName : "";
+  auto fail = [this, &target](const std::string& reason) {
+    this->LastError = (target.empty() ? std::string("(no file name)") : target) + ": cannot write (" + reason + ")";
+    vtkErrorMacro(<< this->LastError);
+    return 0;
+  };
+  if (target.empty())
+  {
+    return fail("no file name set");
+  }
+  if (!input || !input->GetPointData()->GetScalars() || input->GetNumberOfPoints() < 1)
+  {
+    return fail("input has no image scalars");
+  }
+  if (input->GetPointData()->GetScalars()->GetNumberOfComponents() != 1)
+  {
+    return fail("input scalars have more than one component");
+  }
+  const bool compress = EndsWith(target, ".nii.gz");
+  const bool pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
+  if (!(compress || pair || EndsWith(target, ".nii") || EndsWith(target, ".nrrd") || EndsWith(target, ".mha")))
+  {
+    return fail("unknown extension; use .nii, .nii.gz, .nrrd, .nhdr, .mha or .mhd");
+  }
+  RegisterItkFactories();
+
+  const fs::path finalPath(target);
+  fs::path dir = finalPath.parent_path();
+  if (dir.empty())
+  {
+    dir = ".";
+  }
+  const std::string base = finalPath.filename().string();
+  const std::string tag = ".repose-tmp-" + std::to_string(::getpid()) + "-";
+  std::error_code ec;
+  // Single files get a temporary name with the same extension; header+data pairs are written into a
+  // temporary folder (relative data-file references stay valid) and both files are moved out.
+  const fs::path tmpDir = dir / (tag + base + ".d");
+  const fs::path tmpFile = pair ? tmpDir / base : dir / (tag + base);
+  if (!fs::is_directory(dir, ec))
+  {
+    return fail("directory " + dir.string() + " does not exist");
+  }
+  try
+  {
+    if (pair)
+    {
+      fs::create_directory(tmpDir);
+    }
+    WriteByType(input, tmpFile.string(), compress);
+    // Some ITK writers (NIfTI) report failures on stderr only.
+    if (!fs::exists(tmpFile))
+    {
+      throw std::runtime_error("the image writer produced no file (directory not writable or disk full?)");
+    }
+    if (pair)
+    {
+      for (const auto& entry : fs::directory_iterator(tmpDir))
+      {
+        fs::rename(entry.path(), dir / entry.path().filename());
+      }
+      fs::remove(tmpDir);
+    }
+    else
+    {
+      fs::rename(tmpFile, finalPath);
+    }
+  }
+  catch (const itk::ExceptionObject& e)
+  {
+    pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
+    return fail(e.GetDescription());
+  }
+  catch (const std::exception& e)
+  {
+    pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
+    return fail(e.what());
+  }
+  return 1;
+}
+
+void vtkReposeImageWriter::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+}

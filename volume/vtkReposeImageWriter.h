@@ -1,0 +1,48 @@
+#ifndef vtkReposeImageWriter_h
+#define vtkReposeImageWriter_h
+// Writes 3-D scalar vtkImageData (int, short, unsigned char, float, double) through ITK with its
+// origin, spacing and direction matrix. Format by extension: .nii, .nii.gz (compressed), .nrrd,
+// .nhdr, .mha, .mhd. Output is written under a temporary name in the target directory and renamed
+// into place, so a failed or interrupted write never leaves a partial file under the final name.
+
+#include "ReposeVolumeModule.h"
+#include "vtkImageAlgorithm.h"
+
+#include <string>
+
+class vtkImageData;
+
+class REPOSEVOLUME_EXPORT vtkReposeImageWriter : public vtkImageAlgorithm
+{
+public:
+  static vtkReposeImageWriter* New();
+  vtkTypeMacro(vtkReposeImageWriter, vtkImageAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  vtkSetStringMacro(FileName);
+  vtkGetStringMacro(FileName);
+
+  /// Updates the input and writes it. Returns 1 on success, 0 on failure (see GetLastError()).
+  int Write();
+
+  /// One-line description of the last failure ("FILE: cannot write (reason)"), empty after success.
+  const char* GetLastError() { return this->LastError.c_str(); }
+
+protected:
+  vtkReposeImageWriter();
+  ~vtkReposeImageWriter() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int FillOutputPortInformation(int port, vtkInformation* info) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int WriteImage(vtkImageData* image);
+
+  char* FileName = nullptr;
+  std::string LastError;
+
+private:
+  vtkReposeImageWriter(const vtkReposeImageWriter&) = delete;
+  void operator=(const vtkReposeImageWriter&) = delete;
+};
+
+#endif

@@ -1,0 +1,301 @@
+#include "vtkReposePosedVolume.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellType.h"
+#include "vtkDataArray.h"
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkIntArray.h"
+#include "vtkMatrix3x3.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkUnstructuredGrid.h"
+
+#include "resample_pull.h"
+
+#include <stdexcept>
+#include <string>
+
+vtkStandardNewMacro(vtkReposePosedVolume);
+
+namespace
+{
+template <class S, class D>
+void CopyCast(const S* src, std::size_t n, D* dst)
+{
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    dst[i] = static_cast<D>(src[i]);
+  }
+}
+
+template <class D>
+void CopyScalars(vtkDataArray* array, std::vector<D>& dst)
+{
+  const std::size_t n = static_cast<std::size_t>(array->GetNumberOfTuples());
+  dst.resize(n);
+  switch (array->GetDataType())
+  {
+    vtkTemplateMacro(CopyCast(static_cast<const VTK_TT*>(array->GetVoidPointer(0)), n, dst.data()));
+    default:
+      throw std::invalid_argument(std::string("unsupported image scalar type ") + array->GetDataTypeAsString());
+  }
+}
+
+repose::Points ToPoints(vtkPoints* points)
+{
+  repose::Points P(points ? points->GetNumberOfPoints() : 0, 3);
+  if (P.rows() == 0)
+  {
+    return P;
+  }
+  vtkDataArray* data = points->GetData();
+  switch (data->GetDataType())
+  {
+    vtkTemplateMacro(CopyCast(static_cast<const VTK_TT*>(data->GetVoidPointer(0)),
+      static_cast<std::size_t>(P.size()), P.data()));
+  }
+  return P;
+}
+
+repose::Tets ToTets(vtkUnstructuredGrid* mesh, const char* what)
+{
+  const vtkIdType n = mesh->GetNumberOfCells();
+  repose::Tets T(n, 4);
+  vtkIdType npts;
+  const vtkIdType* pts;
+  for (vtkIdType c = 0; c < n; ++c)
+  {
+    if (mesh->GetCellType(c) != VTK_TETRA)
+    {
+      throw std::invalid_argument(std::string(what) + " cell " + std::to_string(c) +
+        " is not a tetrahedron; pass a tet mesh (e.g. from vtkReposeBodyMesher)");
+    }
+    mesh->GetCellPoints(c, npts, pts);
+    for (int a = 0; a < 4; ++a)
+    {
+      T(c, a) = static_cast<int>(pts[a]);
+    }
+  }
+  return T;
+}
+
+// Rest grid from pipeline information (voxel of extent start is the grid's first voxel).
+repose::ImageGrid GridFromInfo(const int ext[6], const double origin[3], const double spacing[3],
+  const double direction[9])
+{
+  repose::ImageGrid g;
+  for (int a = 0; a < 3; ++a)
+  {
+    g.dims[a] = ext[2 * a + 1] - ext[2 * a] + 1;
+    g.spacing[a] = spacing[a];
+    g.origin[a] = origin[a];
+    for (int b = 0; b < 3; ++b)
+    {
+      g.direction(a, b) = direction[3 * a + b];
+    }
+  }
+  g.origin = g.indexToPhysical(Eigen::Vector3d(ext[0], ext[2], ext[4]));
+  return g;
+}
+
+void GridToArrays(const repose::ImageGrid& g, int ext[6], double origin[3], double spacing[3], double direction[9])
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    ext[2 * a] = 0;
+    ext[2 * a + 1] = g.dims[a] - 1;
+    origin[a] = g.origin[a];
+    spacing[a] = g.spacing[a];
+    for (int b = 0; b < 3; ++b)
+    {
+      direction[3 * a + b] = g.direction(a, b);
+    }
+  }
+}
+}
+
+vtkReposePosedVolume::vtkReposePosedVolume()
+{
+  this->SetNumberOfInputPorts(3);
+  this->SetNumberOfOutputPorts(1);
+}
+
+int vtkReposePosedVolume::FillInputPortInformation(int port, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), port == 0 ? "vtkImageData" : "vtkUnstructuredGrid");
+  return 1;
+}
+
+int vtkReposePosedVolume::RequestInformation(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  // The output lattice depends on the posed node positions, so the posed mesh is brought up to date
+  // here (unstructured data: no extents to negotiate).
+  int algPort = 0;
+  vtkAlgorithm* posedAlg = this->GetInputAlgorithm(2, 0, algPort);
+  if (!posedAlg)
+  {
+    vtkErrorMacro(<< "posed tet mesh (input 2) is not set");
+    return 0;
+  }
+  posedAlg->Update(algPort);
+  vtkInformation* imageInfo = inputVector[0]->GetInformationObject(0);
+  vtkUnstructuredGrid* posed = vtkUnstructuredGrid::GetData(inputVector[2]);
+  if (!imageInfo || !posed)
+  {
+    vtkErrorMacro(<< "rest image (input 0) and posed tet mesh (input 2) are required");
+    return 0;
+  }
+  int ext[6];
+  double origin[3] = { 0, 0, 0 }, spacing[3] = { 1, 1, 1 };
+  double direction[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
+  imageInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext);
+  if (imageInfo->Has(vtkDataObject::ORIGIN()))
+  {
+    imageInfo->Get(vtkDataObject::ORIGIN(), origin);
+  }
+  if (imageInfo->Has(vtkDataObject::SPACING()))
+  {
+    imageInfo->Get(vtkDataObject::SPACING(), spacing);
+  }
+  if (imageInfo->Has(vtkDataObject::DIRECTION()))
+  {
+    imageInfo->Get(vtkDataObject::DIRECTION(), direction);
+  }
+  try
+  {
+    const repose::ImageGrid rest = GridFromInfo(ext, origin, spacing, direction);
+    const repose::ImageGrid out =
+      repose::posedOutputGrid(rest, ToPoints(posed->GetPoints()), this->PaddingVoxels);
+    GridToArrays(out, ext, origin, spacing, direction);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext, 6);
+  outInfo->Set(vtkDataObject::ORIGIN(), origin, 3);
+  outInfo->Set(vtkDataObject::SPACING(), spacing, 3);
+  outInfo->Set(vtkDataObject::DIRECTION(), direction, 9);
+  vtkDataObject::SetPointDataActiveScalarInfo(
+    outInfo, this->Interpolation == Nearest ? VTK_INT : VTK_FLOAT, 1);
+  return 1;
+}
+
+int vtkReposePosedVolume::RequestUpdateExtent(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
+{
+  // The whole rest image is needed whatever part of the output is requested.
+  vtkInformation* imageInfo = inputVector[0]->GetInformationObject(0);
+  int ext[6];
+  imageInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), ext);
+  imageInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(), ext, 6);
+  return 1;
+}
+
+int vtkReposePosedVolume::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkImageData* image = vtkImageData::GetData(inputVector[0]);
+  vtkUnstructuredGrid* restMesh = vtkUnstructuredGrid::GetData(inputVector[1]);
+  vtkUnstructuredGrid* posedMesh = vtkUnstructuredGrid::GetData(inputVector[2]);
+  vtkImageData* output = vtkImageData::GetData(outputVector);
+  if (!image || !restMesh || !posedMesh)
+  {
+    vtkErrorMacro(<< "needs a rest image (input 0), a rest tet mesh (input 1) and a posed tet mesh (input 2)");
+    return 0;
+  }
+  vtkDataArray* scalars = image->GetPointData()->GetScalars();
+  if (!scalars || scalars->GetNumberOfComponents() != 1)
+  {
+    vtkErrorMacro(<< "rest image has no single-component scalars");
+    return 0;
+  }
+  try
+  {
+    if (restMesh->GetNumberOfPoints() != posedMesh->GetNumberOfPoints() ||
+      restMesh->GetNumberOfCells() != posedMesh->GetNumberOfCells())
+    {
+      throw std::invalid_argument("rest and posed tet meshes differ in topology (" +
+        std::to_string(restMesh->GetNumberOfPoints()) + " vs " +
+        std::to_string(posedMesh->GetNumberOfPoints()) + " nodes)");
+    }
+    int ext[6];
+    image->GetExtent(ext);
+    double direction[9];
+    for (int a = 0; a < 3; ++a)
+    {
+      for (int b = 0; b < 3; ++b)
+      {
+        direction[3 * a + b] = image->GetDirectionMatrix()->GetElement(a, b);
+      }
+    }
+    const repose::ImageGrid rest = GridFromInfo(ext, image->GetOrigin(), image->GetSpacing(), direction);
+    const repose::Points restNodes = ToPoints(restMesh->GetPoints());
+    const repose::Points posedNodes = ToPoints(posedMesh->GetPoints());
+    const repose::Tets tets = ToTets(restMesh, "rest mesh");
+    const repose::ImageGrid outGrid = repose::posedOutputGrid(rest, posedNodes, this->PaddingVoxels);
+    repose::PullResampleReport report;
+    vtkSmartPointer<vtkDataArray> outScalars;
+    if (this->Interpolation == Nearest)
+    {
+      repose::LabelVolume labels;
+      labels.grid = rest;
+      CopyScalars(scalars, labels.data);
+      const repose::LabelVolume result = repose::resampleLabelsPull(labels, restNodes, posedNodes, tets,
+        outGrid, static_cast<std::int32_t>(this->BackgroundValue), &report);
+      auto array = vtkSmartPointer<vtkIntArray>::New();
+      array->SetNumberOfTuples(static_cast<vtkIdType>(result.data.size()));
+      std::copy(result.data.begin(), result.data.end(), array->GetPointer(0));
+      outScalars = array;
+    }
+    else
+    {
+      repose::IntensityVolume values;
+      values.grid = rest;
+      CopyScalars(scalars, values.data);
+      const repose::IntensityVolume result = repose::resampleIntensityPull(values, restNodes, posedNodes,
+        tets, outGrid, static_cast<float>(this->BackgroundValue), &report);
+      auto array = vtkSmartPointer<vtkFloatArray>::New();
+      array->SetNumberOfTuples(static_cast<vtkIdType>(result.data.size()));
+      std::copy(result.data.begin(), result.data.end(), array->GetPointer(0));
+      outScalars = array;
+    }
+    outScalars->SetName(scalars->GetName() ? scalars->GetName() : "ImageScalars");
+    double origin[3], spacing[3];
+    GridToArrays(outGrid, ext, origin, spacing, direction);
+    output->Initialize();
+    output->SetExtent(ext);
+    output->SetOrigin(origin);
+    output->SetSpacing(spacing);
+    output->SetDirectionMatrix(direction);
+    output->GetPointData()->SetScalars(outScalars);
+    this->CoveredVoxels = static_cast<vtkIdType>(report.coveredVoxels);
+    this->InvertedTets = static_cast<vtkIdType>(report.invertedTets);
+    this->LastResampleTime = report.seconds;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  return 1;
+}
+
+void vtkReposePosedVolume::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "Interpolation: " << (this->Interpolation == Nearest ? "Nearest" : "Linear") << "\n";
+  os << indent << "BackgroundValue: " << this->BackgroundValue << "\n";
+  os << indent << "PaddingVoxels: " << this->PaddingVoxels << "\n";
+  os << indent << "CoveredVoxels: " << this->CoveredVoxels << "\n";
+  os << indent << "InvertedTets: " << this->InvertedTets << "\n";
+  os << indent << "LastResampleTime: " << this->LastResampleTime << "\n";
+}
