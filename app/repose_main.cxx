@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <vtkImageData.h>
+#include <vtkLogger.h>
 #include <vtkNew.h>
 #include <vtkObject.h>
 #include <vtkOutputWindow.h>
@@ -118,7 +119,7 @@ const char* kPrepareUsage =
     "  --image FILE            CT on the label grid: the body is the labels united with CT above the threshold\n"
     "  --body-threshold HU     default -500\n"
     "  --mesh-spacing MM       mesh the body on this voxel size (default: the label spacing); coarser = fewer tets\n"
-    "  --quality RATIO         TetGen radius-edge bound (default 1.6)\n"
+    "  --quality RATIO         TetGen radius-edge bound (default 2.0)\n"
     "  --influences K          bone weights kept per node (default 4)\n"
     "  --surface-reduction F   fraction of surface triangles removed by decimation (default 0)\n";
 
@@ -191,7 +192,8 @@ int runPhantom(const Options& o) {
 
 void prepareCase(repose::Pipeline& pipeline, vtkImageData* labels, const std::string& labelsName,
                  const std::string& skeletonJson, const std::string& skeletonName, vtkImageData* image,
-                 const Options& o, const std::string& caseDir, const std::string& labelsExt) {
+                 const std::string& imageName, const Options& o, const std::string& caseDir,
+                 const std::string& labelsExt) {
   repose::PrepareSettings s;
   s.bodyThreshold = o.number("body-threshold", s.bodyThreshold);
   s.meshSpacing = o.number("mesh-spacing", s.meshSpacing);
@@ -202,7 +204,7 @@ void prepareCase(repose::Pipeline& pipeline, vtkImageData* labels, const std::st
   if (s.meshSpacing < 0) throw UsageError("--mesh-spacing must not be negative");
   if (s.radiusEdgeRatio < 1.1) throw UsageError("--quality must be at least 1.1 (TetGen does not terminate below)");
   if (s.surfaceReduction < 0 || s.surfaceReduction >= 1) throw UsageError("--surface-reduction must be in [0, 1)");
-  pipeline.prepare(labels, labelsName, skeletonJson, skeletonName, image, s);
+  pipeline.prepare(labels, labelsName, skeletonJson, skeletonName, image, imageName, s);
   pipeline.saveCase(caseDir, labelsExt);
   for (const auto& line : pipeline.reportLines()) std::cout << "  " << line << "\n";
 }
@@ -220,7 +222,7 @@ int runPrepare(const Options& o) {
   if (o.has("image")) image = repose::readIntensityImage(o.get("image"));
   std::string ext = repose::imageExtension(labelsPath);
   if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha") ext = ".nii.gz";
-  prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath, image, o, caseDir, ext);
+  prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath, image, o.get("image"), o, caseDir, ext);
   std::cout << "prepared case written to " << caseDir << "\n";
   printTimings(pipeline);
   return 0;
@@ -296,7 +298,8 @@ int runDemo(const Options& o, int argc, char** argv) {
   repose::writeTextFile(out.stage("skeleton.json"), skeletonJson);
   repose::writeTextFile(out.stage("pose.json"), kDemoPose);
   repose::writeTextFile(out.stage("labels.tsv"), phantom->GetLabelTableTSV());
-  prepareCase(pipeline, labels, "phantom", skeletonJson, "phantom skeleton", nullptr, o, out.stage("case"), ".nii.gz");
+  prepareCase(pipeline, labels, "phantom", skeletonJson, "phantom skeleton", nullptr, "", o, out.stage("case"),
+              ".nii.gz");
 
   pipeline.setPose(kDemoPose, "demo pose");
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
@@ -322,7 +325,14 @@ int runDemo(const Options& o, int argc, char** argv) {
 class QuietOutputWindow : public vtkOutputWindow {
 public:
   static QuietOutputWindow* New() { return new QuietOutputWindow; }
-  void DisplayText(const char* text) override {
+  void DisplayText(const char* text) override { show(text); }
+  void DisplayErrorText(const char* text) override { show(text); }
+  void DisplayWarningText(const char* text) override { show(text); }
+  void DisplayGenericWarningText(const char* text) override { show(text); }
+  void DisplayDebugText(const char* text) override { show(text); }
+
+private:
+  static void show(const char* text) {
     if (std::getenv("REPOSE_VERBOSE")) std::cerr << text;
   }
 };
@@ -332,6 +342,7 @@ public:
 int main(int argc, char** argv) {
   vtkNew<QuietOutputWindow> quiet;
   vtkOutputWindow::SetInstance(quiet);
+  if (!std::getenv("REPOSE_VERBOSE")) vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
     std::cout << kMainUsage;
     return argc < 2 ? 2 : 0;

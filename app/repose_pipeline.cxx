@@ -210,7 +210,8 @@ void Pipeline::note(const std::string& stage) {
 void Pipeline::timed(const std::string& stage, double seconds) { timings_.push_back({stage, seconds}); }
 
 void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, const std::string& skeletonJson,
-                       const std::string& skeletonName, vtkImageData* image, const PrepareSettings& settings) {
+                       const std::string& skeletonName, vtkImageData* image, const std::string& imageName,
+                       const PrepareSettings& settings) {
   Skeleton skeleton;
   try {
     skeleton = parseSkeletonJson(skeletonJson);
@@ -218,7 +219,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
     throw std::runtime_error(skeletonName + ": " + e.what());
   }
   if (skeleton.joints.empty()) throw std::runtime_error(skeletonName + ": skeleton has no joints");
-  if (image) checkSameGrid(labels, labelsName, image, "image");
+  if (image) checkSameGrid(labels, labelsName, image, imageName);
 
   // Every bone label must be present: a bone without voxels cannot carry weights.
   std::set<int> present;

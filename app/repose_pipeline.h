@@ -24,7 +24,7 @@ namespace repose {
 struct PrepareSettings {
   double bodyThreshold = -500.0;   ///< HU, with a CT image
   double meshSpacing = 0.0;        ///< mm; 0 = the label volume's spacing
-  double radiusEdgeRatio = 1.6;    ///< TetGen quality bound
+  double radiusEdgeRatio = 2.0;    ///< TetGen quality bound
   int maxInfluences = 4;           ///< bone weights kept per node
   double surfaceReduction = 0.0;   ///< fraction of surface triangles removed by decimation
 };
@@ -59,7 +59,8 @@ public:
   /// Validates the skeleton against the labels (every bone label present) and runs meshing,
   /// weights, surface extraction and binding. `image` may be null. Names are used in messages.
   void prepare(vtkImageData* labels, const std::string& labelsName, const std::string& skeletonJson,
-               const std::string& skeletonName, vtkImageData* image, const PrepareSettings& settings);
+               const std::string& skeletonName, vtkImageData* image, const std::string& imageName,
+               const PrepareSettings& settings);
   /// Writes mesh.vtu, surfaces.vtp, skeleton.json, labels<ext>, manifest.json atomically.
   void saveCase(const std::string& caseDir, const std::string& labelsExtension = ".nii.gz") const;
   /// Throws std::runtime_error naming the missing or broken file.

@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <stdexcept>
 #include <sstream>
 
 #include "body_mask.h"
@@ -208,6 +209,7 @@ int vtkReposeBodyMesher::RequestData(
     if (this->PeelOuterLayer)
     {
       mask = repose::peelOuterLayer(mask);
+      repose::keepBoneVoxels(mask, labels, boneOfLabel);
       meshVoxels = std::count(mask.data.begin(), mask.data.end(), 1);
       if (meshVoxels == 0)
       {
@@ -220,25 +222,6 @@ int vtkReposeBodyMesher::RequestData(
            << SecondsSince(t) << " s)\n";
 
     t = Clock::now();
-    vtkNew<vtkPolyData> surface;
-    if (!vtkReposeSurfaceExtractor::ContourMask(
-          ToImage(mask), this->MeshingSpacing, this->SurfaceSmoothingIterations, 0.1, 0.0, surface))
-    {
-      vtkErrorMacro("no body surface could be extracted (MeshingSpacing too coarse for the body?)");
-      return 0;
-    }
-    repose::Points V;
-    repose::Triangles F;
-    if (!ToTriangles(surface, V, F))
-    {
-      vtkErrorMacro("the body surface has non-triangle cells");
-      return 0;
-    }
-    this->NumberOfSurfaceTriangles = F.rows();
-    report << "surface: " << V.rows() << " points, " << F.rows() << " triangles (" << SecondsSince(t)
-           << " s)\n";
-
-    t = Clock::now();
     const double minSpacing = labels.grid.spacing.minCoeff();
     const double ratio = std::max(1.0, this->MeshingSpacing / minSpacing);
     const int surfaceStep =
@@ -249,11 +232,46 @@ int vtkReposeBodyMesher::RequestData(
     report << "bone seeds: " << seeds.rows() << " (steps " << surfaceStep << "/" << interiorStep
            << " voxels, " << SecondsSince(t) << " s)\n";
 
+    vtkSmartPointer<vtkImageData> maskImage = ToImage(mask);
     repose::TetMeshingOptions meshOptions;
     meshOptions.radiusEdgeRatio = this->RadiusEdgeRatio;
     meshOptions.maxTetVolume = this->MaxTetVolume;
     repose::TetMeshingReport tetReport;
-    repose::TetMesh mesh = repose::tetrahedralizeSurface(V, F, seeds, meshOptions, &tetReport);
+    // Surface -> tets; a decimated surface may self-intersect in a narrow gap, then TetGen
+    // refuses it and the full-resolution surface is used instead.
+    auto meshSurface = [&](double reduction) {
+      auto ts = Clock::now();
+      vtkNew<vtkPolyData> surface;
+      if (!vtkReposeSurfaceExtractor::ContourMask(
+            maskImage, this->MeshingSpacing, this->SurfaceSmoothingIterations, 0.1, reduction, surface))
+      {
+        throw std::invalid_argument("no body surface could be extracted (MeshingSpacing too coarse for the body?)");
+      }
+      repose::Points V;
+      repose::Triangles F;
+      if (!ToTriangles(surface, V, F))
+      {
+        throw std::invalid_argument("the body surface has non-triangle cells");
+      }
+      this->NumberOfSurfaceTriangles = F.rows();
+      report << "surface: " << V.rows() << " points, " << F.rows() << " triangles (reduction " << reduction
+             << ", " << SecondsSince(ts) << " s)\n";
+      return repose::tetrahedralizeSurface(V, F, seeds, meshOptions, &tetReport);
+    };
+    repose::TetMesh mesh;
+    try
+    {
+      mesh = meshSurface(this->SurfaceReduction);
+    }
+    catch (const std::invalid_argument& e)
+    {
+      if (this->SurfaceReduction <= 0)
+      {
+        throw;
+      }
+      report << "decimated surface rejected (" << e.what() << "); meshing the full surface\n";
+      mesh = meshSurface(0.0);
+    }
     this->TetGenSeconds = tetReport.seconds;
     report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
            << " s)\n";

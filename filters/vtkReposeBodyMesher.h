@@ -48,13 +48,18 @@ public:
   vtkSetClampMacro(MeshingSpacing, double, 0.0, 1000.0);
   vtkGetMacro(MeshingSpacing, double);
 
-  /// TetGen quality bound (radius-edge ratio, > 1; default 1.6) and maximum tet volume (mm^3, 0 = none).
+  /// TetGen quality bound (radius-edge ratio, > 1; default 2.0, TetGen's own; 1.6 gives ~35 % more tets at ~4x the time) and maximum tet volume (mm^3, 0 = none).
   vtkSetClampMacro(RadiusEdgeRatio, double, 1.05, 100.0);
   vtkGetMacro(RadiusEdgeRatio, double);
   vtkSetClampMacro(MaxTetVolume, double, 0.0, 1e12);
   vtkGetMacro(MaxTetVolume, double);
 
   /// Windowed-sinc smoothing iterations of the body surface (0 = none; default 10).
+  /// Fraction of the body surface's triangles removed by quadric decimation before meshing (the
+  /// marching-cubes surface has several triangles per voxel face; the surface density sets the tet
+  /// count). If TetGen finds the decimated surface self-intersecting, meshing is redone without it.
+  vtkSetClampMacro(SurfaceReduction, double, 0.0, 0.95);
+  vtkGetMacro(SurfaceReduction, double);
   vtkSetClampMacro(SurfaceSmoothingIterations, int, 0, 1000);
   vtkGetMacro(SurfaceSmoothingIterations, int);
 
@@ -91,9 +96,10 @@ protected:
   double BodyThreshold = -500.0;
   bool PeelOuterLayer = true;
   double MeshingSpacing = 0.0;
-  double RadiusEdgeRatio = 1.6;
+  double RadiusEdgeRatio = 2.0;
   double MaxTetVolume = 0.0;
   int SurfaceSmoothingIterations = 10;
+  double SurfaceReduction = 0.0;
   int SeedSurfaceStep = 0;
   int SeedInteriorStep = 0;
 

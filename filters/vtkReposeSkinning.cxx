@@ -1,9 +1,11 @@
 #include "vtkReposeSkinning.h"
 
 #include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
 #include "vtkFloatArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
@@ -15,6 +17,7 @@
 #include "skeleton.h"
 #include "skinning.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -29,8 +32,7 @@ struct vtkReposeSkinning::Internals
   repose::Points Rest;
   repose::SparseWeights Weights;
   std::vector<int> FixedBone;
-  repose::Points Posed;
-  vtkSmartPointer<vtkPoints> OutputPoints;
+  repose::Points Posed;  // reused: a new pose does not reallocate it
 
   void Convert(vtkUnstructuredGrid* input)
   {
@@ -142,24 +144,31 @@ int vtkReposeSkinning::RequestData(
       in.Posed);
     this->LastSkinningTime = std::chrono::duration<double>(Clock::now() - t0).count();
 
-    // Reuse one float vtkPoints so a new pose does not reallocate.
+    // New points every run (a downstream shallow copy of an earlier pose must not change), of the
+    // input's precision so the rest pose reproduces the input points exactly.
     const vtkIdType np = in.Posed.rows();
-    if (!in.OutputPoints)
-    {
-      in.OutputPoints = vtkSmartPointer<vtkPoints>::New();
-      in.OutputPoints->SetDataTypeToFloat();
-    }
-    in.OutputPoints->SetNumberOfPoints(np);
-    float* dst = static_cast<vtkFloatArray*>(in.OutputPoints->GetData())->GetPointer(0);
+    vtkNew<vtkPoints> points;
     const double* src = in.Posed.data();
-    vtkSMPTools::For(0, 3 * np, 65536, [dst, src](vtkIdType b, vtkIdType e) {
-      for (vtkIdType i = b; i < e; ++i)
-        dst[i] = static_cast<float>(src[i]);
-    });
-    in.OutputPoints->Modified();
+    if (input->GetPoints() && input->GetPoints()->GetDataType() == VTK_DOUBLE)
+    {
+      points->SetDataTypeToDouble();
+      points->SetNumberOfPoints(np);
+      double* dst = static_cast<vtkDoubleArray*>(points->GetData())->GetPointer(0);
+      std::copy(src, src + 3 * np, dst);
+    }
+    else
+    {
+      points->SetDataTypeToFloat();
+      points->SetNumberOfPoints(np);
+      float* dst = static_cast<vtkFloatArray*>(points->GetData())->GetPointer(0);
+      vtkSMPTools::For(0, 3 * np, 65536, [dst, src](vtkIdType b, vtkIdType e) {
+        for (vtkIdType i = b; i < e; ++i)
+          dst[i] = static_cast<float>(src[i]);
+      });
+    }
 
     output->ShallowCopy(input);
-    output->SetPoints(in.OutputPoints);
+    output->SetPoints(points);
   }
   catch (const std::exception& e)
   {

@@ -199,6 +199,24 @@ TEST(PeelOuterLayer, ErodesOneLayerAndWidensGaps) {
   EXPECT_EQ(countOnes(peelOuterLayer(full)), std::size_t(27));
 }
 
+TEST(PeelOuterLayer, BoneVoxelsAreKept) {
+  MaskVolume mask = twoBoxes(1);
+  LabelVolume labels = makeLabels(mask.grid);
+  for (std::size_t v = 0; v < mask.data.size(); ++v) labels.data[v] = mask.data[v] ? 1 : 0;
+  labels.at(2, 4, 4) = 7;  // a bone voxel on the first box's outer layer
+  labels.at(3, 4, 4) = 7;
+  labels.at(9, 4, 4) = 8;  // label 8 is tissue
+  MaskVolume peeled = peelOuterLayer(mask);
+  ASSERT_EQ(peeled.at(2, 4, 4), 0);
+  keepBoneVoxels(peeled, labels, std::vector<int>{-1, -1, -1, -1, -1, -1, -1, 0});
+  EXPECT_EQ(peeled.at(2, 4, 4), 1);
+  EXPECT_EQ(peeled.at(9, 4, 4), 0);
+  EXPECT_EQ(countOnes(peeled), std::size_t(2 * 4 * 4 * 4 + 1));
+  LabelVolume other = labels;
+  other.grid.dims = {23, 10, 10};
+  EXPECT_THROW(keepBoneVoxels(peeled, other, {}), std::invalid_argument);
+}
+
 TEST(TetMesher, CubeWithSeeds) {
   Points V(0, 3);
   Triangles F(0, 3);

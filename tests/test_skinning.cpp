@@ -63,14 +63,16 @@ TEST(Skinning, OneBoneIsItsRigidTransform) {
   const repose::Points rest = randomPoints(1000, 1);
   const std::vector<Eigen::Isometry3d> bones = {Eigen::Isometry3d::Identity(),
                                                 rigid(131, {0.3, 1, -0.2}, {10, 20, -5})};
-  const repose::SparseWeights w = oneBoneWeights(1000, 4, 1);
-  for (auto method : {repose::SkinningMethod::DualQuaternion, repose::SkinningMethod::LinearBlend}) {
-    repose::Points posed;
-    repose::skinNodes(rest, w, {}, bones, method, posed);
-    ASSERT_EQ(posed.rows(), rest.rows());
-    for (int i = 0; i < rest.rows(); ++i) {
-      const Eigen::Vector3d expected = bones[1] * Eigen::Vector3d(rest.row(i));
-      EXPECT_LT((Eigen::Vector3d(posed.row(i)) - expected).norm(), 1e-9) << i;
+  for (int k : {1, 4, 6}) {  // compile-time and run-time k paths
+    const repose::SparseWeights w = oneBoneWeights(1000, k, 1);
+    for (auto method : {repose::SkinningMethod::DualQuaternion, repose::SkinningMethod::LinearBlend}) {
+      repose::Points posed;
+      repose::skinNodes(rest, w, {}, bones, method, posed);
+      ASSERT_EQ(posed.rows(), rest.rows());
+      for (int i = 0; i < rest.rows(); ++i) {
+        const Eigen::Vector3d expected = bones[1] * Eigen::Vector3d(rest.row(i));
+        EXPECT_LT((Eigen::Vector3d(posed.row(i)) - expected).norm(), 1e-9) << "k=" << k << " node " << i;
+      }
     }
   }
 }

@@ -196,3 +196,16 @@ MaskVolume peelOuterLayer(const MaskVolume& mask) {
 }
 
 }  // namespace repose
+
+namespace repose {
+
+void keepBoneVoxels(MaskVolume& peeled, const LabelVolume& labels, const std::vector<int>& boneOfLabel) {
+  if (!peeled.grid.sameGridAs(labels.grid) || peeled.data.size() != labels.data.size())
+    throw std::invalid_argument("keep bone voxels: mask and labels are on different grids");
+  for (std::size_t v = 0; v < labels.data.size(); ++v) {
+    const int label = labels.data[v];
+    if (label >= 0 && std::size_t(label) < boneOfLabel.size() && boneOfLabel[label] >= 0) peeled.data[v] = 1;
+  }
+}
+
+}  // namespace repose

@@ -1,6 +1,7 @@
 #pragma once
 // The region to mesh: every non-background voxel, optionally united with CT above a threshold.
 #include <optional>
+#include <vector>
 
 #include "image_grid.h"
 
@@ -19,5 +20,14 @@ MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, con
 /// Removes the outer voxel layer (6-neighbourhood erosion), so parts that touch skin-to-skin in the
 /// scan (an arm against the torso, the thighs) are not welded together by the mesh.
 MaskVolume peelOuterLayer(const MaskVolume& mask);
+
+}  // namespace repose
+
+namespace repose {
+
+/// Puts bone voxels back into a peeled mask: peeling is for skin-to-skin contacts, and a bone
+/// cut by the field of view or lying under a thin skin must stay in the mesh whole.
+/// boneOfLabel maps label -> bone or -1 (labels beyond its size are not bone).
+void keepBoneVoxels(MaskVolume& peeled, const LabelVolume& labels, const std::vector<int>& boneOfLabel);
 
 }  // namespace repose

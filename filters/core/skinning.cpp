@@ -26,6 +26,104 @@ inline void applyMatrix(const double* m, const double* p, double* out) {
   out[2] = m[8] * p[0] + m[9] * p[1] + m[10] * p[2] + m[11];
 }
 
+struct SkinContext {
+  int k, nb;
+  const double* rest;
+  double* posed;
+  const float* w;
+  const std::uint16_t* bone;
+  const int* fixed;  // null when no node is fixed
+  const BoneDQ* dqs;
+  const BoneMatrix* mats;
+  bool dualQuaternion;
+  std::atomic<long long>* badNode;
+};
+
+// The node loop; K > 0 fixes k at compile time (fully unrolled slot loops), K = 0 reads c.k.
+template <int K>
+void skinRange(const SkinContext& c, std::size_t begin, std::size_t end) {
+  const int k = K > 0 ? K : c.k;
+  const int nb = c.nb;
+  const double* restData = c.rest;
+  double* posedData = c.posed;
+  const float* wData = c.w;
+  const std::uint16_t* bData = c.bone;
+  const int* fixedData = c.fixed;
+  const BoneDQ* dqs = c.dqs;
+  const BoneMatrix* mats = c.mats;
+  const bool dqs_method = c.dualQuaternion;
+  std::atomic<long long>& badNode = *c.badNode;
+  for (std::size_t i = begin; i < end; ++i) {
+    const double* p = restData + 3 * i;
+    double* out = posedData + 3 * i;
+    const float* w = wData + i * std::size_t(k);
+    const std::uint16_t* bo = bData + i * std::size_t(k);
+    if (fixedData && fixedData[i] >= 0) {
+      if (fixedData[i] >= nb) {
+        badNode.store(static_cast<long long>(i));
+        continue;
+      }
+      applyMatrix(mats[fixedData[i]].m, p, out);
+      continue;
+    }
+    bool bad = false;
+    for (int s = 0; s < k; ++s) bad |= int(bo[s]) >= nb;
+    if (bad) {
+      badNode.store(static_cast<long long>(i));
+      continue;
+    }
+    if (dqs_method) {
+      // Antipodality: align every bone's quaternion with the largest-weight bone's.
+      int pivot = 0;
+      for (int s = 1; s < k; ++s)
+        if (w[s] > w[pivot]) pivot = s;
+      const double* pr = dqs[bo[pivot]].r;
+      double r0 = 0, r1 = 0, r2 = 0, r3 = 0, d0 = 0, d1 = 0, d2 = 0, d3 = 0;
+      for (int s = 0; s < k; ++s) {
+        const BoneDQ& q = dqs[bo[s]];
+        // Branchless sign flip: the signs are unpredictable across nodes.
+        const double ws = std::copysign(
+            double(w[s]), q.r[0] * pr[0] + q.r[1] * pr[1] + q.r[2] * pr[2] + q.r[3] * pr[3]);
+        r0 += ws * q.r[0]; r1 += ws * q.r[1]; r2 += ws * q.r[2]; r3 += ws * q.r[3];
+        d0 += ws * q.d[0]; d1 += ws * q.d[1]; d2 += ws * q.d[2]; d3 += ws * q.d[3];
+      }
+      const double n2 = r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3;
+      if (!(n2 > 0)) {  // all weights zero: leave the node at rest
+        out[0] = p[0]; out[1] = p[1]; out[2] = p[2];
+        continue;
+      }
+      // Normalising by |r| enters both terms below squared, so 2/|r|^2 suffices (no sqrt).
+      const double s2 = 2.0 / n2;
+      // t = 2 (w0 ve - we v0 + v0 x ve) / |r|^2
+      const double tx = s2 * (r0 * d1 - d0 * r1 + r2 * d3 - r3 * d2);
+      const double ty = s2 * (r0 * d2 - d0 * r2 + r3 * d1 - r1 * d3);
+      const double tz = s2 * (r0 * d3 - d0 * r3 + r1 * d2 - r2 * d1);
+      // p' = p + 2 v x (v x p + w p) / |r|^2 + t
+      const double cx = r2 * p[2] - r3 * p[1] + r0 * p[0];
+      const double cy = r3 * p[0] - r1 * p[2] + r0 * p[1];
+      const double cz = r1 * p[1] - r2 * p[0] + r0 * p[2];
+      out[0] = p[0] + s2 * (r2 * cz - r3 * cy) + tx;
+      out[1] = p[1] + s2 * (r3 * cx - r1 * cz) + ty;
+      out[2] = p[2] + s2 * (r1 * cy - r2 * cx) + tz;
+    } else {
+      double m[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+      double wsum = 0;
+      for (int s = 0; s < k; ++s) {
+        const double ws = w[s];
+        if (ws == 0) continue;
+        wsum += ws;
+        const double* mb = mats[bo[s]].m;
+        for (int c = 0; c < 12; ++c) m[c] += ws * mb[c];
+      }
+      if (!(wsum > 0)) {
+        out[0] = p[0]; out[1] = p[1]; out[2] = p[2];
+        continue;
+      }
+      applyMatrix(m, p, out);
+    }
+  }
+}
+
 }  // namespace
 
 void skinNodes(const Points& rest, const SparseWeights& weights, const std::vector<int>& fixedBone,
@@ -56,83 +154,24 @@ void skinNodes(const Points& rest, const SparseWeights& weights, const std::vect
 
   posed.resize(rest.rows(), 3);
   std::atomic<long long> badNode{-1};
-  const double* restData = rest.data();
-  double* posedData = posed.data();
-  const float* wData = weights.weight.data();
-  const std::uint16_t* bData = weights.bone.data();
-  const int* fixedData = fixedBone.empty() ? nullptr : fixedBone.data();
-  const bool dqs_method = method == SkinningMethod::DualQuaternion;
-
-  parallelFor(nv, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const double* p = restData + 3 * i;
-      double* out = posedData + 3 * i;
-      const float* w = wData + i * std::size_t(k);
-      const std::uint16_t* bo = bData + i * std::size_t(k);
-      if (fixedData && fixedData[i] >= 0) {
-        if (fixedData[i] >= nb) {
-          badNode.store(static_cast<long long>(i));
-          continue;
-        }
-        applyMatrix(mats[fixedData[i]].m, p, out);
-        continue;
-      }
-      bool bad = false;
-      for (int s = 0; s < k; ++s) bad |= int(bo[s]) >= nb;
-      if (bad) {
-        badNode.store(static_cast<long long>(i));
-        continue;
-      }
-      if (dqs_method) {
-        // Antipodality: align every bone's quaternion with the largest-weight bone's.
-        int pivot = 0;
-        for (int s = 1; s < k; ++s)
-          if (w[s] > w[pivot]) pivot = s;
-        const double* pr = dqs[bo[pivot]].r;
-        double r0 = 0, r1 = 0, r2 = 0, r3 = 0, d0 = 0, d1 = 0, d2 = 0, d3 = 0;
-        for (int s = 0; s < k; ++s) {
-          const BoneDQ& q = dqs[bo[s]];
-          // Branchless sign flip: the signs are unpredictable across nodes.
-          const double ws = std::copysign(
-              double(w[s]), q.r[0] * pr[0] + q.r[1] * pr[1] + q.r[2] * pr[2] + q.r[3] * pr[3]);
-          r0 += ws * q.r[0]; r1 += ws * q.r[1]; r2 += ws * q.r[2]; r3 += ws * q.r[3];
-          d0 += ws * q.d[0]; d1 += ws * q.d[1]; d2 += ws * q.d[2]; d3 += ws * q.d[3];
-        }
-        const double n2 = r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3;
-        if (!(n2 > 0)) {  // all weights zero: leave the node at rest
-          out[0] = p[0]; out[1] = p[1]; out[2] = p[2];
-          continue;
-        }
-        const double inv = 1.0 / std::sqrt(n2);
-        r0 *= inv; r1 *= inv; r2 *= inv; r3 *= inv;
-        d0 *= inv; d1 *= inv; d2 *= inv; d3 *= inv;
-        // t = 2 (w0 ve - we v0 + v0 x ve)
-        const double tx = 2 * (r0 * d1 - d0 * r1 + r2 * d3 - r3 * d2);
-        const double ty = 2 * (r0 * d2 - d0 * r2 + r3 * d1 - r1 * d3);
-        const double tz = 2 * (r0 * d3 - d0 * r3 + r1 * d2 - r2 * d1);
-        // p' = p + 2 v x (v x p + w p) + t
-        const double cx = r2 * p[2] - r3 * p[1] + r0 * p[0];
-        const double cy = r3 * p[0] - r1 * p[2] + r0 * p[1];
-        const double cz = r1 * p[1] - r2 * p[0] + r0 * p[2];
-        out[0] = p[0] + 2 * (r2 * cz - r3 * cy) + tx;
-        out[1] = p[1] + 2 * (r3 * cx - r1 * cz) + ty;
-        out[2] = p[2] + 2 * (r1 * cy - r2 * cx) + tz;
-      } else {
-        double m[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-        double wsum = 0;
-        for (int s = 0; s < k; ++s) {
-          const double ws = w[s];
-          if (ws == 0) continue;
-          wsum += ws;
-          const double* mb = mats[bo[s]].m;
-          for (int c = 0; c < 12; ++c) m[c] += ws * mb[c];
-        }
-        if (!(wsum > 0)) {
-          out[0] = p[0]; out[1] = p[1]; out[2] = p[2];
-          continue;
-        }
-        applyMatrix(m, p, out);
-      }
+  SkinContext ctx;
+  ctx.k = k;
+  ctx.nb = nb;
+  ctx.rest = rest.data();
+  ctx.posed = posed.data();
+  ctx.w = weights.weight.data();
+  ctx.bone = weights.bone.data();
+  ctx.fixed = fixedBone.empty() ? nullptr : fixedBone.data();
+  ctx.dqs = dqs.data();
+  ctx.mats = mats.data();
+  ctx.dualQuaternion = method == SkinningMethod::DualQuaternion;
+  ctx.badNode = &badNode;
+  parallelFor(nv, [&ctx](std::size_t begin, std::size_t end) {
+    switch (ctx.k) {
+      case 4: skinRange<4>(ctx, begin, end); break;
+      case 2: skinRange<2>(ctx, begin, end); break;
+      case 3: skinRange<3>(ctx, begin, end); break;
+      default: skinRange<0>(ctx, begin, end); break;
     }
   }, 8192);
   if (badNode.load() >= 0)

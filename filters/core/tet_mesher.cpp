@@ -57,14 +57,14 @@ void checkClosedSurface(const Triangles& F) {
 
 // TetGen 1.5.0's tetrahedralize() crashes when it reports an error: terminatetetgen() frees the mesh
 // and throws, then the destructor of its stack mesh frees it again. So the stages we use (-p without
-// -Y/-r/-m/-R, optional -i, -q) are driven here with a heap mesh, leaked on error (its pools are
-// already freed then).
-void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out, tetgenio* addin) {
+// -Y/-r/-m/-R, -q) are driven here with a heap mesh, leaked on error (its pools are already freed then).
+// Seeds are passed as isolated input points, not with -i: 1.5.0's insertconstrainedpoints() can walk
+// off the carved mesh and crash.
+void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
   auto* m = new tetgenmesh();
   try {
     m->b = &b;
     m->in = &in;
-    m->addin = addin;
     m->initializepools();
     m->transfernodes();
     exactinit(b.verbose, b.noexact, b.nostaticfilter, m->xmax - m->xmin, m->ymax - m->ymin, m->zmax - m->zmin);
@@ -73,7 +73,6 @@ void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out, tetgenio* addin) 
     m->meshsurface();
     m->constraineddelaunay(stamp);
     m->carveholes();
-    if (b.insertaddpoints && addin && addin->numberofpoints > 0) m->insertconstrainedpoints(addin);
     if (b.quality) m->delaunayrefinement();
     if (b.optlevel > 0) m->optimizemesh();
     if (!b.nojettison && (m->dupverts > 0 || m->unuverts > 0)) m->jettisonnodes();
@@ -107,11 +106,13 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
   if (options.maxTetVolume < 0) throw std::invalid_argument("tet mesher: the maximum tet volume must be >= 0");
   checkClosedSurface(F);
 
-  tetgenio in, addin, out;
+  tetgenio in, out;
   in.firstnumber = 0;
-  in.numberofpoints = int(V.rows());
-  in.pointlist = new REAL[std::size_t(V.rows()) * 3];
+  // Surface points, then the seeds as isolated points (TetGen drops those outside the surface).
+  in.numberofpoints = int(V.rows() + seeds.rows());
+  in.pointlist = new REAL[std::size_t(in.numberofpoints) * 3];
   std::copy(V.data(), V.data() + V.size(), in.pointlist);  // row-major #V by 3
+  if (seeds.rows() > 0) std::copy(seeds.data(), seeds.data() + seeds.size(), in.pointlist + V.size());
   in.numberoffacets = int(F.rows());
   in.facetlist = new tetgenio::facet[std::size_t(F.rows())];
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
@@ -123,14 +124,8 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
     facet.polygonlist[0].numberofvertices = 3;
     facet.polygonlist[0].vertexlist = new int[3]{F(f, 0), F(f, 1), F(f, 2)};
   }
-  if (seeds.rows() > 0) {
-    addin.firstnumber = 0;
-    addin.numberofpoints = int(seeds.rows());
-    addin.pointlist = new REAL[std::size_t(seeds.rows()) * 3];
-    std::copy(seeds.data(), seeds.data() + seeds.size(), addin.pointlist);
-  }
 
-  // p: PLC, q: quality bound, a: volume bound, z: zero-based, i: insert addin points, F: no face
+  // p: PLC, q: quality bound, a: volume bound, z: zero-based, F: no face
   // output (not needed), Q/V: quiet/verbose. Boundary splitting stays allowed (more robust recovery).
   std::ostringstream sw;
   sw.precision(17);
@@ -141,7 +136,6 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
   }
   if (options.maxTetVolume > 0) sw << "a" << options.maxTetVolume;
   sw << "zF";
-  if (seeds.rows() > 0) sw << "i";
   sw << (options.verbose ? "V" : "Q");
   std::string switches = sw.str();
 
@@ -149,7 +143,7 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
   if (!behavior.parse_commandline(&switches[0]))
     throw std::invalid_argument("tet mesher: TetGen rejected the switches '" + switches + "'");
   try {
-    runTetGen(behavior, in, out, seeds.rows() > 0 ? &addin : nullptr);
+    runTetGen(behavior, in, out);
   } catch (int code) {
     throw std::invalid_argument("tet mesher: " + tetgenErrorText(code));
   } catch (const std::bad_alloc&) {

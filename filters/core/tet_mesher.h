@@ -6,7 +6,7 @@
 namespace repose {
 
 struct TetMeshingOptions {
-  double radiusEdgeRatio = 1.6;   ///< TetGen -q quality bound
+  double radiusEdgeRatio = 2.0;   ///< TetGen -q quality bound
   double minDihedralDegrees = 0;  ///< TetGen -q second value, 0 = TetGen default
   double maxTetVolume = 0;        ///< mm^3, 0 = unbounded (grading comes from the surface and seeds)
   bool verbose = false;

@@ -5,22 +5,29 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "parallel_for.h"
+#include "tet_boundary.h"
 
 namespace repose {
 namespace {
 
 // Slack on barycentric coordinates so voxel centres on shared faces are covered by at least one tet
-// despite rounding (no cracks); the first tet (lowest index) to claim a voxel wins.
+// despite rounding (no cracks); the lowest-numbered tet covering a voxel gives its value.
 constexpr double kBaryEps = 1e-7;
 // k-slices per slab: slabs are the unit of parallel work, each written by one thread only.
 constexpr int kSlabSlices = 16;
+constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+// Per-voxel coverage marks of a slab.
+constexpr std::uint8_t kEmpty = 0, kCovered = 1, kExtrapolated = 2;
 
 void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& restNodes,
-              const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid) {
+              const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
+              const PullResampleOptions& options) {
   if (restGrid.voxelCount() == 0 || restSize != restGrid.voxelCount())
     throw std::invalid_argument("pull resample: rest volume data size (" + std::to_string(restSize) +
                                 ") does not match its grid (" + std::to_string(restGrid.voxelCount()) +
@@ -38,262 +45,445 @@ void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& res
     throw std::invalid_argument("pull resample: tet node index out of range [0, " + std::to_string(nV) + ")");
   if (!posedNodes.allFinite() || !restNodes.allFinite())
     throw std::invalid_argument("pull resample: non-finite node coordinates");
+  if (!std::isfinite(options.extrapolationDistance))
+    throw std::invalid_argument("pull resample: extrapolation distance must be finite");
+  if (options.boundary && options.boundary->boundaryFaceMask.size() != std::size_t(tets.rows()))
+    throw std::invalid_argument("pull resample: tet boundary has " +
+                                std::to_string(options.boundary->boundaryFaceMask.size()) + " tets but the mesh has " +
+                                std::to_string(tets.rows()) + "; compute it with tetBoundary(tets)");
 }
 
-// Per-tet affine maps in index space: barycentric rows (λ_a = g_a · x + c_a, x in output index space)
-// and the rest point r = A x + b (rest index space).
+// Affine maps of one tet in index space: barycentric λ_a = g_a · x + c_a (x = output index, c_a
+// includes the slack) and rest index r = A x + b.
 struct TetSetup {
-  Eigen::Matrix<double, 4, 4> bary;  // row a: (g_a.x, g_a.y, g_a.z, c_a)
-  Eigen::Matrix3d A;
-  Eigen::Vector3d b;
-  double lo[3], hi[3];               // bounding box in output index space
-  double vy[4], vz[4];               // node j, k coordinates (cross-sections)
-  double invSlope[4];                // 1 / dλ_a/di (0 when λ_a is constant along rows)
-  double edgeDyDz[6];                // dy/dz along each edge (0 for edges parallel to the k planes)
+  double g[4][3], c[4];
+  double A[3][3], b[3];
+  double lo[3], hi[3];    // posed bounding box (output index space)
+  double vy[4], vz[4];    // posed vertex j, k (cross-sections)
+  bool restInside;        // rest tet well inside the rest grid: no bounds checks needed
 };
 
-constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+using Vertices = double[4][3];
 
-bool setupTet(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& R, const Tets& tets,
-              std::size_t t, TetSetup& s) {
-  const Eigen::Vector3d& p0 = P[tets(t, 0)];
-  Eigen::Matrix3d M;
-  M.col(0) = P[tets(t, 1)] - p0;
-  M.col(1) = P[tets(t, 2)] - p0;
-  M.col(2) = P[tets(t, 3)] - p0;
-  const double det = M.determinant();
-  if (!(std::abs(det) > 0)) return false;
-  const Eigen::Matrix3d Minv = M.inverse();
-  // λ_{1..3} = Minv (x - p0), λ0 = 1 - Σ.
-  for (int a = 0; a < 3; ++a) {
-    s.bary.block<1, 3>(a + 1, 0) = Minv.row(a);
-    s.bary(a + 1, 3) = -Minv.row(a).dot(p0);
-  }
-  s.bary.row(0) = -(s.bary.row(1) + s.bary.row(2) + s.bary.row(3));
-  s.bary(0, 3) += 1.0;
-  const Eigen::Vector3d& r0 = R[tets(t, 0)];
-  Eigen::Matrix3d E;
-  E.col(0) = R[tets(t, 1)] - r0;
-  E.col(1) = R[tets(t, 2)] - r0;
-  E.col(2) = R[tets(t, 3)] - r0;
-  s.A = E * Minv;
-  s.b = r0 - s.A * p0;
-  for (int a = 0; a < 4; ++a) {
-    s.vy[a] = P[tets(t, a)].y();
-    s.vz[a] = P[tets(t, a)].z();
-    s.invSlope[a] = std::abs(s.bary(a, 0)) > 1e-300 ? 1.0 / s.bary(a, 0) : 0.0;
-  }
-  for (int e = 0; e < 6; ++e) {
-    const double dz = s.vz[kEdges[e][1]] - s.vz[kEdges[e][0]];
-    s.edgeDyDz[e] = std::abs(dz) > 1e-12 ? (s.vy[kEdges[e][1]] - s.vy[kEdges[e][0]]) / dz : 0.0;
-  }
-  for (int a = 0; a < 3; ++a) {
-    s.lo[a] = s.hi[a] = p0[a];
-    for (int c = 1; c < 4; ++c) {
-      s.lo[a] = std::min(s.lo[a], P[tets(t, c)][a]);
-      s.hi[a] = std::max(s.hi[a], P[tets(t, c)][a]);
+// p: posed vertices (output index space), r: rest vertices (rest index space). False if degenerate.
+bool setupTet(const Vertices& p, const Vertices& r, const int restDims[3], TetSetup& s) {
+  double e[3][3], f[3][3];
+  for (int q = 0; q < 3; ++q)
+    for (int m = 0; m < 3; ++m) {
+      e[q][m] = p[q + 1][m] - p[0][m];
+      f[q][m] = r[q + 1][m] - r[0][m];
     }
+  // Rows of the inverse of [e0 e1 e2] (columns): cross products over the determinant.
+  double n[3][3];
+  for (int q = 0; q < 3; ++q) {
+    const double* u = e[(q + 1) % 3];
+    const double* v = e[(q + 2) % 3];
+    n[q][0] = u[1] * v[2] - u[2] * v[1];
+    n[q][1] = u[2] * v[0] - u[0] * v[2];
+    n[q][2] = u[0] * v[1] - u[1] * v[0];
+  }
+  const double det = e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
+  if (!(std::abs(det) > 0)) return false;
+  const double inv = 1.0 / det;
+  for (int a = 0; a < 4; ++a) s.c[a] = 0;
+  for (int q = 0; q < 3; ++q) {
+    for (int m = 0; m < 3; ++m) s.g[q + 1][m] = n[q][m] * inv;
+    s.c[q + 1] = -(s.g[q + 1][0] * p[0][0] + s.g[q + 1][1] * p[0][1] + s.g[q + 1][2] * p[0][2]);
+  }
+  for (int m = 0; m < 3; ++m) s.g[0][m] = -(s.g[1][m] + s.g[2][m] + s.g[3][m]);
+  s.c[0] = 1.0 - (s.c[1] + s.c[2] + s.c[3]);
+  for (int a = 0; a < 4; ++a) s.c[a] += kBaryEps;
+  for (int m = 0; m < 3; ++m) {
+    for (int k = 0; k < 3; ++k) s.A[m][k] = f[0][m] * s.g[1][k] + f[1][m] * s.g[2][k] + f[2][m] * s.g[3][k];
+    s.b[m] = r[0][m] - (s.A[m][0] * p[0][0] + s.A[m][1] * p[0][1] + s.A[m][2] * p[0][2]);
+  }
+  s.restInside = true;
+  for (int m = 0; m < 3; ++m) {
+    double lo = p[0][m], hi = p[0][m], rlo = r[0][m], rhi = r[0][m];
+    for (int a = 1; a < 4; ++a) {
+      lo = std::min(lo, p[a][m]);
+      hi = std::max(hi, p[a][m]);
+      rlo = std::min(rlo, r[a][m]);
+      rhi = std::max(rhi, r[a][m]);
+    }
+    s.lo[m] = lo;
+    s.hi[m] = hi;
+    s.restInside = s.restInside && rlo > -0.5 + 1e-3 && rhi < restDims[m] - 0.5 - 1e-3;
+  }
+  for (int a = 0; a < 4; ++a) {
+    s.vy[a] = p[a][1];
+    s.vz[a] = p[a][2];
   }
   return true;
 }
 
-// Scanline rasterizer shared by labels and intensities (the output is pre-filled with background). Sampler: void(const Eigen::Vector3d& restIndex,
-// std::size_t outIndex) writes one voxel.
-template <class Sampler>
-void rasterize(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes, const Tets& tets,
-               const ImageGrid& outGrid, PullResampleReport* report, const Sampler& sample) {
-  const auto start = std::chrono::steady_clock::now();
+// Calls emit(i0, i1, j, k) for every run of voxel centres (i0..i1, j, k), k in [k0, k1], with all
+// λ_a >= -kBaryEps. Each λ_a is linear in i along a row, so a run is an intersection of half-lines.
+template <class Emit>
+inline void scanTet(const TetSetup& s, int k0, int k1, int nx, int ny, Emit&& emit) {
+  const double kb = std::max(double(k0), std::ceil(s.lo[2] - 1e-6));
+  const double ke = std::min(double(k1), std::floor(s.hi[2] + 1e-6));
+  const double ib = std::max(0.0, std::ceil(s.lo[0] - 1e-6));
+  const double ie = std::min(double(nx - 1), std::floor(s.hi[0] + 1e-6));
+  if (kb > ke || ib > ie) return;
+  // Constraints by the sign of dλ/di: lower bounds, upper bounds, and row tests (λ constant along i).
+  int lower[4], upper[4], flat[4], nl = 0, nu = 0, nf = 0;
+  double negInv[4];
+  for (int a = 0; a < 4; ++a) {
+    negInv[a] = s.g[a][0] != 0 ? -1.0 / s.g[a][0] : 0.0;
+    if (s.g[a][0] > 0)
+      lower[nl++] = a;
+    else if (s.g[a][0] < 0)
+      upper[nu++] = a;
+    else
+      flat[nf++] = a;
+  }
+  double edgeDyDz[6];
+  for (int e = 0; e < 6; ++e) {
+    const double dz = s.vz[kEdges[e][1]] - s.vz[kEdges[e][0]];
+    edgeDyDz[e] = std::abs(dz) > 1e-12 ? (s.vy[kEdges[e][1]] - s.vy[kEdges[e][0]]) / dz : 0.0;
+  }
+  for (int k = int(kb); k <= int(ke); ++k) {
+    // j-range of the cross-section at plane k (edge crossings), padded so rounding never drops a row;
+    // rows it adds needlessly come out empty below.
+    double ylo = 1e300, yhi = -1e300;
+    for (int e = 0; e < 6; ++e) {
+      const int a = kEdges[e][0], b = kEdges[e][1];
+      const double za = s.vz[a], zb = s.vz[b];
+      const double zmin = std::min(za, zb), zmax = std::max(za, zb);
+      if (k < zmin - 1e-6 || k > zmax + 1e-6) continue;
+      if (zmax - zmin > 1e-12) {
+        const double y = s.vy[a] + (std::min(std::max(double(k), zmin), zmax) - za) * edgeDyDz[e];
+        ylo = std::min(ylo, y);
+        yhi = std::max(yhi, y);
+      } else {
+        ylo = std::min({ylo, s.vy[a], s.vy[b]});
+        yhi = std::max({yhi, s.vy[a], s.vy[b]});
+      }
+    }
+    const double jb = std::max(0.0, std::ceil(ylo - 1e-4));
+    const double je = std::min(double(ny - 1), std::floor(yhi + 1e-4));
+    if (jb > je) continue;
+    // Bound lines i >= al + bl j (lower), i <= au + bu j (upper), and row tests af + bf j >= 0.
+    double al[4], bl[4], au[4], bu[4], af[4], bf[4];
+    for (int q = 0; q < nl; ++q) {
+      const int a = lower[q];
+      al[q] = (s.g[a][2] * k + s.c[a]) * negInv[a];
+      bl[q] = s.g[a][1] * negInv[a];
+    }
+    for (int q = 0; q < nu; ++q) {
+      const int a = upper[q];
+      au[q] = (s.g[a][2] * k + s.c[a]) * negInv[a];
+      bu[q] = s.g[a][1] * negInv[a];
+    }
+    for (int q = 0; q < nf; ++q) {
+      const int a = flat[q];
+      af[q] = s.g[a][2] * k + s.c[a];
+      bf[q] = s.g[a][1];
+    }
+    for (int j = int(jb); j <= int(je); ++j) {
+      double lo = ib, hi = ie;
+      for (int q = 0; q < nl; ++q) lo = std::max(lo, al[q] + bl[q] * j);
+      for (int q = 0; q < nu; ++q) hi = std::min(hi, au[q] + bu[q] * j);
+      bool ok = true;
+      for (int q = 0; q < nf; ++q) ok = ok && af[q] + bf[q] * j >= 0;
+      lo = std::ceil(lo);
+      hi = std::floor(hi);
+      if (ok && lo <= hi) emit(int(lo), int(hi), j, k);
+    }
+  }
+}
+
+// Tets bucketed by slab (CSR), in increasing tet order.
+struct SlabBuckets {
+  std::vector<std::size_t> offset;
+  std::vector<int> items;
+};
+
+SlabBuckets bucketize(std::size_t n, int nSlabs, const std::vector<int>& slabLo, const std::vector<int>& slabHi) {
+  SlabBuckets B;
+  B.offset.assign(std::size_t(nSlabs) + 1, 0);
+  for (std::size_t t = 0; t < n; ++t)
+    for (int s = slabLo[t]; s <= slabHi[t]; ++s) ++B.offset[std::size_t(s) + 1];
+  for (int s = 0; s < nSlabs; ++s) B.offset[s + 1] += B.offset[s];
+  B.items.resize(B.offset.back());
+  std::vector<std::size_t> fill(B.offset.begin(), B.offset.end() - 1);
+  for (std::size_t t = 0; t < n; ++t)
+    for (int s = slabLo[t]; s <= slabHi[t]; ++s) B.items[fill[s]++] = int(t);
+  return B;
+}
+
+// Everything the slab loop needs, computed once per call.
+struct Prepared {
+  int nx = 0, ny = 0, nz = 0, nSlabs = 0;
+  int restDims[3] = {0, 0, 0};
+  std::vector<float> P, R;  // #V x 3 node positions in output / rest index space
+  SlabBuckets tets;         // pass 1
+  // Pass 2: boundary tets (not inverted) and the barycentric relaxation δ_a of each of their vertices.
+  std::vector<int> extTet;
+  std::vector<float> extDelta;  // 4 per entry of extTet
+  SlabBuckets ext;              // indices into extTet
+  std::size_t inverted = 0;
+};
+
+inline void loadTet(const Prepared& pr, const Tets& tets, std::size_t t, Vertices& p, Vertices& r) {
+  for (int a = 0; a < 4; ++a) {
+    const std::size_t v = std::size_t(tets(t, a)) * 3;
+    for (int m = 0; m < 3; ++m) {
+      p[a][m] = pr.P[v + m];
+      r[a][m] = pr.R[v + m];
+    }
+  }
+}
+
+// The tet inflated by λ_a >= -δ_a: the simplex with barycentrics (λ_a + δ_a) / (1 + Σδ), i.e. vertices
+// q_c = (1 + Σδ) p_c - Σ_b δ_b p_b (a homothety, so orientation is kept). Rest vertices likewise,
+// which extends the tet's affine map.
+void inflate(const Vertices& p, const float* delta, Vertices& q) {
+  double S = 0, sum[3] = {0, 0, 0};
+  for (int b = 0; b < 4; ++b) {
+    S += delta[b];
+    for (int m = 0; m < 3; ++m) sum[m] += delta[b] * p[b][m];
+  }
+  for (int c = 0; c < 4; ++c)
+    for (int m = 0; m < 3; ++m) q[c][m] = (1.0 + S) * p[c][m] - sum[m];
+}
+
+void slabRange(double zlo, double zhi, int nz, int& lo, int& hi) {
+  const double kLo = std::max(0.0, std::ceil(zlo - 1e-6));
+  const double kHi = std::min(double(nz - 1), std::floor(zhi + 1e-6));
+  lo = 0;
+  hi = -1;
+  if (kLo > kHi) return;
+  lo = int(kLo) / kSlabSlices;
+  hi = int(kHi) / kSlabSlices;
+}
+
+Prepared prepare(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes, const Tets& tets,
+                 const ImageGrid& outGrid, const PullResampleOptions& options) {
+  Prepared pr;
+  pr.nx = outGrid.dims[0];
+  pr.ny = outGrid.dims[1];
+  pr.nz = outGrid.dims[2];
+  pr.nSlabs = (pr.nz + kSlabSlices - 1) / kSlabSlices;
+  for (int a = 0; a < 3; ++a) pr.restDims[a] = restGrid.dims[a];
   const std::size_t nV = std::size_t(posedNodes.rows());
   const std::size_t nT = std::size_t(tets.rows());
-  const int nx = outGrid.dims[0], ny = outGrid.dims[1], nz = outGrid.dims[2];
-
-  // Node positions in index spaces (posed: output grid; rest: rest grid).
-  std::vector<Eigen::Vector3d> P(nV), R(nV);
+  pr.P.resize(3 * nV);
+  pr.R.resize(3 * nV);
   parallelFor(nV, [&](std::size_t b, std::size_t e) {
     for (std::size_t v = b; v < e; ++v) {
-      P[v] = outGrid.physicalToIndex(posedNodes.row(v).transpose());
-      R[v] = restGrid.physicalToIndex(restNodes.row(v).transpose());
+      const Eigen::Vector3d p = outGrid.physicalToIndex(posedNodes.row(v).transpose());
+      const Eigen::Vector3d r = restGrid.physicalToIndex(restNodes.row(v).transpose());
+      for (int m = 0; m < 3; ++m) {
+        pr.P[3 * v + m] = float(p[m]);
+        pr.R[3 * v + m] = float(r[m]);
+      }
     }
   });
 
   // Orientation in index space flips with a left-handed direction matrix.
   const double orient = outGrid.direction.determinant() < 0 ? -1.0 : 1.0;
-  const int nSlabs = (nz + kSlabSlices - 1) / kSlabSlices;
-  // k-range of each tet -> slab range; inverted/degenerate tets get an empty range.
+  const double distance = options.extrapolationDistance < 0 ? 2.0 * restGrid.spacing.maxCoeff()
+                                                             : options.extrapolationDistance;
+  const std::uint8_t* boundary =
+      options.boundary && distance > 0 ? options.boundary->boundaryFaceMask.data() : nullptr;
+  const Eigen::Vector3d invSpacing = outGrid.spacing.cwiseInverse();
   std::vector<int> slabLo(nT), slabHi(nT);
+  std::vector<float> delta(boundary ? 4 * nT : 0);
+  std::vector<int> extLo(boundary ? nT : 0), extHi(boundary ? nT : 0);
   std::atomic<std::size_t> inverted{0};
   parallelFor(nT, [&](std::size_t b, std::size_t e) {
     std::size_t localInverted = 0;
+    Vertices p, r, q;
+    TetSetup st;
     for (std::size_t t = b; t < e; ++t) {
-      const Eigen::Vector3d& p0 = P[tets(t, 0)];
-      Eigen::Matrix3d M;
-      M.col(0) = P[tets(t, 1)] - p0;
-      M.col(1) = P[tets(t, 2)] - p0;
-      M.col(2) = P[tets(t, 3)] - p0;
-      const double det = orient * M.determinant();
-      const double scale = M.colwise().norm().prod();
       slabLo[t] = 0;
       slabHi[t] = -1;
+      if (boundary) {
+        extLo[t] = 0;
+        extHi[t] = -1;
+      }
+      loadTet(pr, tets, t, p, r);
+      Eigen::Matrix3d M;
+      for (int c = 0; c < 3; ++c)
+        for (int m = 0; m < 3; ++m) M(m, c) = p[c + 1][m] - p[0][m];
+      const double det = orient * M.determinant();
+      const double scale = M.colwise().norm().prod();
       if (!(det > 1e-12 * scale)) {
         ++localInverted;
         continue;
       }
-      double zlo = p0.z(), zhi = p0.z();
+      double zlo = p[0][2], zhi = p[0][2];
       for (int c = 1; c < 4; ++c) {
-        zlo = std::min(zlo, P[tets(t, c)].z());
-        zhi = std::max(zhi, P[tets(t, c)].z());
+        zlo = std::min(zlo, p[c][2]);
+        zhi = std::max(zhi, p[c][2]);
       }
-      const double kLo = std::max(0.0, std::ceil(zlo - 1e-6));
-      const double kHi = std::min(double(nz - 1), std::floor(zhi + 1e-6));
-      if (kLo > kHi) continue;
-      slabLo[t] = int(kLo) / kSlabSlices;
-      slabHi[t] = int(kHi) / kSlabSlices;
+      slabRange(zlo, zhi, pr.nz, slabLo[t], slabHi[t]);
+      if (!boundary || !boundary[t] || !setupTet(p, r, pr.restDims, st)) continue;
+      // δ_a = d / h_a, h_a (mm) = 1 / |physical gradient of λ_a|.
+      float* dl = &delta[4 * t];
+      for (int a = 0; a < 4; ++a) {
+        const Eigen::Vector3d g(st.g[a][0], st.g[a][1], st.g[a][2]);
+        dl[a] = (boundary[t] >> a) & 1 ? float(distance * g.cwiseProduct(invSpacing).norm()) : 0.0f;
+      }
+      inflate(p, dl, q);
+      zlo = q[0][2];
+      zhi = q[0][2];
+      for (int c = 1; c < 4; ++c) {
+        zlo = std::min(zlo, q[c][2]);
+        zhi = std::max(zhi, q[c][2]);
+      }
+      slabRange(zlo, zhi, pr.nz, extLo[t], extHi[t]);
     }
     inverted += localInverted;
   }, 4096);
-
-  // Bucket tets per slab (CSR), in increasing tet order so "first writer wins" is deterministic.
-  std::vector<std::size_t> offset(std::size_t(nSlabs) + 1, 0);
-  for (std::size_t t = 0; t < nT; ++t)
-    for (int s = slabLo[t]; s <= slabHi[t]; ++s) ++offset[std::size_t(s) + 1];
-  for (int s = 0; s < nSlabs; ++s) offset[s + 1] += offset[s];
-  std::vector<int> bucket(offset.back());
-  {
-    std::vector<std::size_t> fill(offset.begin(), offset.end() - 1);
-    for (std::size_t t = 0; t < nT; ++t)
-      for (int s = slabLo[t]; s <= slabHi[t]; ++s) bucket[fill[s]++] = int(t);
+  pr.inverted = inverted.load();
+  pr.tets = bucketize(nT, pr.nSlabs, slabLo, slabHi);
+  if (boundary) {
+    std::vector<int> lo, hi;
+    for (std::size_t t = 0; t < nT; ++t) {
+      if (extLo[t] > extHi[t]) continue;
+      pr.extTet.push_back(int(t));
+      pr.extDelta.insert(pr.extDelta.end(), &delta[4 * t], &delta[4 * t] + 4);
+      lo.push_back(extLo[t]);
+      hi.push_back(extHi[t]);
+    }
+    pr.ext = bucketize(pr.extTet.size(), pr.nSlabs, lo, hi);
   }
-  slabLo.clear();
-  slabLo.shrink_to_fit();
-  slabHi.clear();
-  slabHi.shrink_to_fit();
+  return pr;
+}
 
-  std::atomic<std::size_t> covered{0};
+// Runs both passes slab by slab. Kernel provides
+//   fill(begin, end)                      background into output voxels [begin, end)
+//   cover(s, i0, i1, j, k, row)           pass 1: write every voxel of the run (overwriting)
+//   extend(s, i0, i1, j, k, row, mark)    pass 2: write voxels whose mark is kEmpty, mark them
+// where row is the linear index of voxel (0, j, k). Pass 1 visits tets in decreasing order, so the
+// lowest-numbered tet covering a voxel writes last; pass 2 in increasing order, first writer wins.
+template <class Kernel>
+void run(const Prepared& pr, const Tets& tets, const Kernel& kernel, PullResampleReport* report,
+         std::chrono::steady_clock::time_point start, std::size_t outputVoxels) {
+  const int nx = pr.nx, ny = pr.ny, nz = pr.nz, nSlabs = pr.nSlabs;
   const std::size_t sliceSize = std::size_t(nx) * ny;
-  // Interleave slabs so a static two-way split still gets both ends of the body.
+  std::atomic<std::size_t> covered{0}, extrapolated{0};
   parallelFor(std::size_t(nSlabs), [&](std::size_t b, std::size_t e) {
-    std::vector<std::uint8_t> written(sliceSize * kSlabSlices);
+    std::vector<std::uint8_t> marks(sliceSize * kSlabSlices);
     TetSetup st;
-    std::size_t localCovered = 0;
+    Vertices p, r, q, qr;
+    std::size_t localCovered = 0, localExtrapolated = 0;
     for (std::size_t w = b; w < e; ++w) {
+      // Interleave slabs so a static two-way split still gets both ends of the body.
       const std::size_t half = (std::size_t(nSlabs) + 1) / 2;
       const int s = w < half ? int(2 * w) : int(2 * (w - half) + 1);
       const int k0 = s * kSlabSlices, k1 = std::min(nz - 1, k0 + kSlabSlices - 1);
-      std::fill(written.begin(), written.end(), 0);
-      for (std::size_t q = offset[s]; q < offset[s + 1]; ++q) {
-        const std::size_t t = std::size_t(bucket[q]);
-        if (!setupTet(P, R, tets, t, st)) continue;
-        const int kb = std::max(k0, int(std::ceil(st.lo[2] - 1e-6)));
-        const int ke = std::min(k1, int(std::floor(st.hi[2] + 1e-6)));
-        const double ib = std::max(0.0, std::ceil(st.lo[0] - 1e-6));
-        const double ie = std::min(double(nx - 1), std::floor(st.hi[0] + 1e-6));
-        if (ib > ie) continue;
-        const Eigen::Vector3d stepI = st.A.col(0);
-        for (int k = kb; k <= ke; ++k) {
-          // j-range of the cross-section at plane k (edge crossings, clamped), padded: rows it adds
-          // needlessly are rejected below, and the padding keeps rounding from dropping a row.
-          double ylo = 1e300, yhi = -1e300;
-          for (int e = 0; e < 6; ++e) {
-            const int a = kEdges[e][0], b = kEdges[e][1];
-            const double za = st.vz[a], zb = st.vz[b];
-            if (k < std::min(za, zb) - 1e-6 || k > std::max(za, zb) + 1e-6) continue;
-            if (st.edgeDyDz[e] != 0.0 || std::abs(zb - za) > 1e-12) {
-              // Crossing point, clamped to the edge.
-              const double zc = std::min(std::max(double(k), std::min(za, zb)), std::max(za, zb));
-              const double y = st.vy[a] + (zc - za) * st.edgeDyDz[e];
-              ylo = std::min(ylo, y);
-              yhi = std::max(yhi, y);
-            } else {
-              ylo = std::min({ylo, st.vy[a], st.vy[b]});
-              yhi = std::max({yhi, st.vy[a], st.vy[b]});
-            }
-          }
-          const int jb = std::max(0, int(std::ceil(ylo - 1e-4)));
-          const int je = std::min(ny - 1, int(std::floor(yhi + 1e-4)));
-          double baseK[4];
-          for (int a = 0; a < 4; ++a) baseK[a] = st.bary(a, 2) * k + st.bary(a, 3) + kBaryEps;
-          for (int j = jb; j <= je; ++j) {
-            // Each λ_a is linear in i: λ_a = slope * i + base; intersect the half-lines λ_a >= -eps.
-            double lo = ib, hi = ie;
-            for (int a = 0; a < 4; ++a) {
-              const double base = baseK[a] + st.bary(a, 1) * j;
-              const double inv = st.invSlope[a];
-              if (inv > 0) {
-                lo = std::max(lo, std::ceil(-base * inv));
-              } else if (inv < 0) {
-                hi = std::min(hi, std::floor(-base * inv));
-              } else if (base < 0) {
-                hi = lo - 1;
-              }
-            }
-            if (lo > hi) continue;
-            const int i0 = int(lo), i1 = int(hi);
-            Eigen::Vector3d r = st.A * Eigen::Vector3d(i0, j, k) + st.b;
-            std::uint8_t* wrow = written.data() + std::size_t(k - k0) * sliceSize + std::size_t(j) * nx;
-            const std::size_t rowBase = std::size_t(k) * sliceSize + std::size_t(j) * nx;
-            for (int i = i0; i <= i1; ++i, r += stepI) {
-              if (wrow[i]) continue;
-              wrow[i] = 1;
-              ++localCovered;
-              sample(r, rowBase + i);
-            }
-          }
+      const std::size_t slabBase = std::size_t(k0) * sliceSize;
+      const std::size_t slabVoxels = std::size_t(k1 - k0 + 1) * sliceSize;
+      std::uint8_t* mark = marks.data();
+      std::memset(mark, kEmpty, slabVoxels);
+      kernel.fill(slabBase, slabBase + slabVoxels);
+      for (std::size_t q1 = pr.tets.offset[s + 1]; q1-- > pr.tets.offset[s];) {
+        const std::size_t t = std::size_t(pr.tets.items[q1]);
+        loadTet(pr, tets, t, p, r);
+        if (!setupTet(p, r, pr.restDims, st)) continue;
+        scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k) {
+          const std::size_t row = std::size_t(k) * sliceSize + std::size_t(j) * nx;
+          std::memset(mark + (row - slabBase) + i0, kCovered, std::size_t(i1 - i0 + 1));
+          kernel.cover(st, i0, i1, j, k, row);
+        });
+      }
+      if (!pr.ext.offset.empty()) {
+        for (std::size_t q2 = pr.ext.offset[s]; q2 < pr.ext.offset[s + 1]; ++q2) {
+          const std::size_t x = std::size_t(pr.ext.items[q2]);
+          loadTet(pr, tets, std::size_t(pr.extTet[x]), p, r);
+          inflate(p, &pr.extDelta[4 * x], q);
+          inflate(r, &pr.extDelta[4 * x], qr);
+          if (!setupTet(q, qr, pr.restDims, st)) continue;
+          scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k) {
+            const std::size_t row = std::size_t(k) * sliceSize + std::size_t(j) * nx;
+            kernel.extend(st, i0, i1, j, k, row, mark + (row - slabBase));
+          });
         }
+      }
+      for (std::size_t v = 0; v < slabVoxels; ++v) {
+        localCovered += mark[v] == kCovered;
+        localExtrapolated += mark[v] == kExtrapolated;
       }
     }
     covered += localCovered;
+    extrapolated += localExtrapolated;
   }, 1);
-
   if (report) {
-    report->outputVoxels = outGrid.voxelCount();
+    report->outputVoxels = outputVoxels;
     report->coveredVoxels = covered.load();
-    report->invertedTets = inverted.load();
+    report->extrapolatedVoxels = extrapolated.load();
+    report->invertedTets = pr.inverted;
     report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 }
 
-}  // namespace
-
-LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
-                               const Tets& tets, const ImageGrid& outGrid, std::int32_t background,
-                               PullResampleReport* report) {
-  validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid);
-  LabelVolume out;
-  out.grid = outGrid;
-  const int dx = rest.grid.dims[0], dy = rest.grid.dims[1], dz = rest.grid.dims[2];
-  const std::int32_t* src = rest.data.data();
-  std::int32_t* dst = nullptr;
-  // Nearest voxel: the voxel whose footprint [c-0.5, c+0.5) holds the rest point; outside = background.
-  auto sample = [&](const Eigen::Vector3d& r, std::size_t o) {
-    if (r.x() >= -0.5 && r.y() >= -0.5 && r.z() >= -0.5 && r.x() < dx - 0.5 && r.y() < dy - 0.5 &&
-        r.z() < dz - 0.5) {
-      const int i = int(r.x() + 0.5), j = int(r.y() + 0.5), k = int(r.z() + 0.5);
-      dst[o] = src[(std::size_t(k) * dy + j) * dx + i];
-    }
-  };
-  // Allocate first so dst is valid for all threads.
-  out.data.assign(outGrid.voxelCount(), background);
-  dst = out.data.data();
-  rasterize(rest.grid, restNodes, posedNodes, tets, outGrid, report, sample);
-  return out;
+// Rest index of voxel (i0, j, k) under the tet's map, plus `offset` on every axis.
+inline void restStart(const TetSetup& s, int i0, int j, int k, double offset, double r[3]) {
+  for (int m = 0; m < 3; ++m) r[m] = s.A[m][0] * i0 + s.A[m][1] * j + s.A[m][2] * k + s.b[m] + offset;
 }
 
-IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points& restNodes,
-                                      const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
-                                      float background, PullResampleReport* report) {
-  validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid);
-  IntensityVolume out;
-  out.grid = outGrid;
-  const int dx = rest.grid.dims[0], dy = rest.grid.dims[1], dz = rest.grid.dims[2];
-  const float* src = rest.data.data();
-  out.data.assign(outGrid.voxelCount(), background);
-  float* dst = out.data.data();
-  const std::size_t sy = std::size_t(dx), sz = std::size_t(dx) * dy;
+struct LabelKernel {
+  const std::int32_t* src;
+  std::int32_t* dst;
+  int dx, dy, dz;
+  std::int32_t background;
+
+  void fill(std::size_t b, std::size_t e) const {
+    if (background != 0) std::fill(dst + b, dst + e, background);
+  }
+  // Nearest voxel: the one whose footprint [c-0.5, c+0.5) holds the rest point. With r shifted by +0.5
+  // the index is the truncation, and the rest index steps by a constant vector along the row.
+  bool inside(const double r[3]) const {
+    return r[0] >= 0 && r[1] >= 0 && r[2] >= 0 && r[0] < dx && r[1] < dy && r[2] < dz;
+  }
+  std::size_t index(const double r[3]) const {
+    return (std::size_t(int(r[2])) * std::size_t(dy) + std::size_t(int(r[1]))) * std::size_t(dx) + std::size_t(int(r[0]));
+  }
+  void cover(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row) const {
+    double r[3];
+    restStart(s, i0, j, k, 0.5, r);
+    const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
+    std::int32_t* d = dst + row;
+    if (s.restInside) {
+      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) d[i] = src[index(r)];
+    } else {
+      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
+        d[i] = inside(r) ? src[index(r)] : background;
+    }
+  }
+  void extend(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row, std::uint8_t* mark) const {
+    double r[3];
+    restStart(s, i0, j, k, 0.5, r);
+    const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
+    std::int32_t* d = dst + row;
+    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
+      if (mark[i] != kEmpty || !inside(r)) continue;
+      const std::int32_t v = src[index(r)];
+      if (v == background) continue;  // never paint background over a neighbour's extension
+      d[i] = v;
+      mark[i] = kExtrapolated;
+    }
+  }
+};
+
+struct IntensityKernel {
+  const float* src;
+  float* dst;
+  int dx, dy, dz;
+  float background;
+
+  void fill(std::size_t b, std::size_t e) const {
+    if (background != 0.0f) std::fill(dst + b, dst + e, background);
+  }
+  bool inside(const double r[3]) const {
+    return r[0] >= -0.5 && r[1] >= -0.5 && r[2] >= -0.5 && r[0] < dx - 0.5 && r[1] < dy - 0.5 && r[2] < dz - 0.5;
+  }
   // Trilinear inside the voxel footprints of the rest grid (edge voxels replicated within half a voxel).
-  auto sample = [&](const Eigen::Vector3d& r, std::size_t o) {
-    if (!(r.x() >= -0.5 && r.y() >= -0.5 && r.z() >= -0.5 && r.x() < dx - 0.5 && r.y() < dy - 0.5 &&
-          r.z() < dz - 0.5))
-      return;
+  float sample(const double r[3]) const {
     int idx[3];
     double f[3];
     const int d[3] = {dx, dy, dz};
@@ -304,6 +494,7 @@ IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points&
       idx[a] = i;
       f[a] = c - i;
     }
+    const std::size_t sy = std::size_t(dx), sz = std::size_t(dx) * dy;
     const std::size_t base = idx[2] * sz + idx[1] * sy + idx[0];
     const std::size_t ox = dx > 1 ? 1 : 0, oy = dy > 1 ? sy : 0, oz = dz > 1 ? sz : 0;
     const double c00 = src[base] + f[0] * (src[base + ox] - src[base]);
@@ -312,10 +503,73 @@ IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points&
     const double c11 = src[base + oz + oy] + f[0] * (src[base + oz + oy + ox] - src[base + oz + oy]);
     const double c0 = c00 + f[1] * (c10 - c00);
     const double c1 = c01 + f[1] * (c11 - c01);
-    dst[o] = float(c0 + f[2] * (c1 - c0));
-  };
-  rasterize(rest.grid, restNodes, posedNodes, tets, outGrid, report, sample);
+    return float(c0 + f[2] * (c1 - c0));
+  }
+  void cover(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row) const {
+    double r[3];
+    restStart(s, i0, j, k, 0.0, r);
+    const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
+    float* d = dst + row;
+    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
+      d[i] = s.restInside || inside(r) ? sample(r) : background;
+  }
+  void extend(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row, std::uint8_t* mark) const {
+    double r[3];
+    restStart(s, i0, j, k, 0.0, r);
+    const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
+    float* d = dst + row;
+    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
+      if (mark[i] != kEmpty || !inside(r)) continue;
+      d[i] = sample(r);
+      mark[i] = kExtrapolated;
+    }
+  }
+};
+
+}  // namespace
+
+LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
+                               const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                               std::int32_t background, PullResampleReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid, options);
+  const Prepared pr = prepare(rest.grid, restNodes, posedNodes, tets, outGrid, options);
+  LabelVolume out;
+  out.grid = outGrid;
+  out.data.resize(outGrid.voxelCount());  // zeros; slabs fill other backgrounds in parallel
+  const LabelKernel kernel{rest.data.data(), out.data.data(), rest.grid.dims[0], rest.grid.dims[1],
+                           rest.grid.dims[2], background};
+  run(pr, tets, kernel, report, start, outGrid.voxelCount());
   return out;
+}
+
+LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
+                               const Tets& tets, const ImageGrid& outGrid, std::int32_t background,
+                               PullResampleReport* report) {
+  return resampleLabelsPull(rest, restNodes, posedNodes, tets, outGrid, PullResampleOptions{}, background, report);
+}
+
+IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points& restNodes,
+                                      const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
+                                      const PullResampleOptions& options, float background,
+                                      PullResampleReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid, options);
+  const Prepared pr = prepare(rest.grid, restNodes, posedNodes, tets, outGrid, options);
+  IntensityVolume out;
+  out.grid = outGrid;
+  out.data.resize(outGrid.voxelCount());
+  const IntensityKernel kernel{rest.data.data(), out.data.data(), rest.grid.dims[0], rest.grid.dims[1],
+                               rest.grid.dims[2], background};
+  run(pr, tets, kernel, report, start, outGrid.voxelCount());
+  return out;
+}
+
+IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points& restNodes,
+                                      const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
+                                      float background, PullResampleReport* report) {
+  return resampleIntensityPull(rest, restNodes, posedNodes, tets, outGrid, PullResampleOptions{}, background,
+                               report);
 }
 
 }  // namespace repose

@@ -6,11 +6,27 @@
 
 namespace repose {
 
+struct TetBoundary;
+
 struct PullResampleReport {
   std::size_t outputVoxels = 0;
   std::size_t coveredVoxels = 0;     ///< voxels whose centre lies in some posed tet
+  std::size_t extrapolatedVoxels = 0;  ///< voxels written by the extrapolation pass (outside all tets)
   std::size_t invertedTets = 0;      ///< posed tets with non-positive volume (skipped)
   double seconds = 0;
+};
+
+/// The mesh usually stops short of the body's outer voxel layer (the mask is peeled before meshing), so
+/// the boundary tets are extrapolated outward: each tet with a face on the mesh boundary is inflated
+/// through that face (barycentric λ_a >= -d / h_a for the vertex a opposite the face, h_a its height
+/// over the face in the posed tet) and its affine map is applied there too. The extension writes only
+/// voxels no tet covers; labels only when the sampled rest label is not background, intensities only
+/// when the rest point lies in the rest grid.
+struct PullResampleOptions {
+  /// Boundary faces of `tets` (tetBoundary(tets)); null = no extrapolation.
+  const TetBoundary* boundary = nullptr;
+  /// d in mm; negative = 2 x the largest spacing of the rest grid; 0 = no extrapolation.
+  double extrapolationDistance = -1.0;
 };
 
 /// Output grid: the rest grid's spacing and direction, its lattice extended (by whole voxels, so
@@ -18,13 +34,24 @@ struct PullResampleReport {
 /// plus `paddingVoxels` on every side.
 ImageGrid posedOutputGrid(const ImageGrid& rest, const Points& posedNodes, int paddingVoxels = 2);
 
-/// Labels: nearest rest voxel; voxels outside the posed mesh are `background`.
-/// restNodes/posedNodes #V by 3, tets #T by 4. Threaded with parallelFor.
+/// Labels: nearest rest voxel; voxels outside the posed mesh (and its extension) are `background`.
+/// restNodes/posedNodes #V by 3, tets #T by 4. Threaded with parallelFor; deterministic (a voxel
+/// covered by several tets takes the sample of the lowest-numbered one).
+LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
+                               const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                               std::int32_t background = 0, PullResampleReport* report = nullptr);
+/// Without extrapolation.
 LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
                                const Tets& tets, const ImageGrid& outGrid, std::int32_t background = 0,
                                PullResampleReport* report = nullptr);
 
-/// Intensities: trilinear in the rest volume; voxels outside the posed mesh are `background`.
+/// Intensities: trilinear in the rest volume; voxels outside the posed mesh (and its extension) are
+/// `background`.
+IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points& restNodes,
+                                      const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
+                                      const PullResampleOptions& options, float background,
+                                      PullResampleReport* report = nullptr);
+/// Without extrapolation.
 IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points& restNodes,
                                       const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
                                       float background, PullResampleReport* report = nullptr);
