@@ -11,6 +11,7 @@
 #include "vtkPoints.h"
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
+#include "vtkUnsignedShortArray.h"
 #include "vtkUnstructuredGrid.h"
 
 #include "pose.h"
@@ -57,17 +58,31 @@ struct vtkReposeSkinning::Internals
     this->Weights.k = k;
     this->Weights.weight.resize(std::size_t(np) * k);
     this->Weights.bone.resize(std::size_t(np) * k);
-    for (vtkIdType i = 0; i < np; ++i)
-      for (int c = 0; c < k; ++c)
+    // Fast path for vtkReposeBoneWeights' own array types.
+    auto* wf = vtkFloatArray::FastDownCast(w);
+    auto* bu = vtkUnsignedShortArray::FastDownCast(b);
+    if (wf && bu)
+    {
+      const std::size_t n = std::size_t(np) * k;
+      std::copy(wf->GetPointer(0), wf->GetPointer(0) + n, this->Weights.weight.begin());
+      std::copy(bu->GetPointer(0), bu->GetPointer(0) + n, this->Weights.bone.begin());
+    }
+    else
+    {
+      for (vtkIdType i = 0; i < np; ++i)
       {
-        const std::size_t s = std::size_t(i) * k + c;
-        this->Weights.weight[s] = static_cast<float>(w->GetComponent(i, c));
-        const double bone = b->GetComponent(i, c);
-        if (bone < 0 || bone > 65535 || bone != std::floor(bone))
-          throw std::invalid_argument("BoneIds of node " + std::to_string(i) + " holds " +
-            std::to_string(bone) + ", not a bone index");
-        this->Weights.bone[s] = static_cast<std::uint16_t>(bone);
+        for (int c = 0; c < k; ++c)
+        {
+          const std::size_t s = std::size_t(i) * k + c;
+          this->Weights.weight[s] = static_cast<float>(w->GetComponent(i, c));
+          const double bone = b->GetComponent(i, c);
+          if (bone < 0 || bone > 65535 || bone != std::floor(bone))
+            throw std::invalid_argument("BoneIds of node " + std::to_string(i) + " holds " +
+              std::to_string(bone) + ", not a bone index");
+          this->Weights.bone[s] = static_cast<std::uint16_t>(bone);
+        }
       }
+    }
     this->FixedBone.clear();
     if (vtkDataArray* f = pd->GetArray("FixedBone"))
     {

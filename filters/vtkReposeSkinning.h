@@ -3,8 +3,9 @@
 // Poses a weighted tet mesh: forward kinematics of SkeletonJSON + PoseJSON, then dual-quaternion
 // (default) or linear-blend skinning of every node. Input: the output of vtkReposeBoneWeights
 // (point data "Weights", "BoneIds", optional "FixedBone": fixed nodes move rigidly with their bone).
-// Output: same topology and data, posed points (double if the input points are double, else float). The rest points and weights are converted
-// once per input change; a new pose (or method) only re-runs the skinning itself.
+// Output: same topology and data, posed points (double if the input points are double, else float).
+// The rest points and weights are converted once per input change; a new pose (or method) only
+// re-runs the skinning itself.
 
 #include "ReposeFiltersModule.h"
 #include "vtkUnstructuredGridAlgorithm.h"

@@ -160,7 +160,7 @@ HarmonicSolution solveHarmonic(const TetMesh& mesh, const HarmonicWeightsOptions
 
   Eigen::MatrixXd X;
   if (nfree > 0) {
-    const auto t0 = Clock::now();
+    const auto analyzeStart = Clock::now();
     if (options.solver == HarmonicSolver::CholmodSupernodal) {
       report.solver = "CHOLMOD supernodal LLT";
       Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
@@ -174,12 +174,12 @@ HarmonicSolution solveHarmonic(const TetMesh& mesh, const HarmonicWeightsOptions
         solver.cholmod().method[0].ordering = CHOLMOD_GIVEN;
         solver.analyzePattern(Kff);
       }
-      X = factorAndSolve(solver, Kff, B, t0, report);
+      X = factorAndSolve(solver, Kff, B, analyzeStart, report);
     } else {
       report.solver = "Eigen SimplicialLDLT";
       Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
       solver.analyzePattern(Kff);
-      X = factorAndSolve(solver, Kff, B, t0, report);
+      X = factorAndSolve(solver, Kff, B, analyzeStart, report);
     }
   } else {
     report.solver = "none (every node fixed)";

@@ -41,6 +41,9 @@ int findRoot(std::vector<int>& parent, int x) {
 
 }  // namespace
 
+// Face seeds sit this many voxels from the bone voxel centre (< 0.5: still nearest to it).
+constexpr double kFaceSeedOffset = 0.45;
+
 Points boneSeedPoints(const LabelVolume& labels, const std::vector<int>& boneOfLabel, const MaskVolume& mask,
                       int surfaceStep, int interiorStep) {
   checkLabels(labels);
@@ -90,7 +93,19 @@ Points boneSeedPoints(const LabelVolume& labels, const std::vector<int>& boneOfL
                 if (it == picks.end()) picks.push_back({b, dist2, ijk});
                 else if (dist2 < it->dist2) *it = {b, dist2, ijk};
               }
-          for (const auto& p : picks) outPts.push_back(g.indexToPhysical(p.ijk));
+          for (const auto& p : picks) {
+            outPts.push_back(g.indexToPhysical(p.ijk));
+            // Seeds just inside the bone's voxel faces (the nearest voxel stays the bone voxel, so
+            // they are fixed to it): the mesh then follows the bone's boundary, and the tets that
+            // cover bone voxels have only fixed nodes and move exactly rigidly.
+            const int i = int(p.ijk.x()), j = int(p.ijk.y()), k = int(p.ijk.z());
+            const int n[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+            for (const auto& o : n) {
+              const int qi = i + o[0], qj = j + o[1], qk = k + o[2];
+              if (g.contains(qi, qj, qk) && boneAt(qi, qj, qk) == p.bone) continue;
+              outPts.push_back(g.indexToPhysical(p.ijk + kFaceSeedOffset * Eigen::Vector3d(o[0], o[1], o[2])));
+            }
+          }
         }
     }
   }, 1);

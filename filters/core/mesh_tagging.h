@@ -8,8 +8,9 @@
 namespace repose {
 
 /// Points to insert into the mesh so every bone is resolved: centres of bone voxels on each bone's
-/// boundary, subsampled on a lattice of `surfaceStep` voxels, and of interior bone voxels every
-/// `interiorStep` voxels. Only voxels inside `mask` are used. boneOfLabel maps label -> bone or -1.
+/// boundary, subsampled on a lattice of `surfaceStep` voxels, each with seeds 0.45 voxel towards its
+/// non-bone faces (fixed to the bone: they put the bone boundary into the mesh), and of interior bone
+/// voxels every `interiorStep` voxels. Only voxels inside `mask` are used. boneOfLabel maps label -> bone or -1.
 Points boneSeedPoints(const LabelVolume& labels, const std::vector<int>& boneOfLabel, const MaskVolume& mask,
                       int surfaceStep = 2, int interiorStep = 4);
 

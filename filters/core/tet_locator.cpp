@@ -152,6 +152,14 @@ bool TetLocator::findContaining(const Eigen::Vector3d& p, Hit& hit, double eps) 
   return false;
 }
 
+namespace {
+// Tets within 5 % (and a micrometre) of the nearest distance count as equally near, so the
+// best-conditioned of them can be chosen.
+double tieTolerance(double best) {
+  return std::isfinite(best) ? 1e-6 + 0.05 * best : 0.0;
+}
+}  // namespace
+
 TetLocator::Hit TetLocator::findNearest(const Eigen::Vector3d& p) const {
   Hit hit;
   if (tets_.rows() == 0) return hit;
@@ -159,6 +167,7 @@ TetLocator::Hit TetLocator::findNearest(const Eigen::Vector3d& p) const {
   const Eigen::Array3i c0 = cellOf(p);
   const int maxRing = dims_.maxCoeff();
   double best = std::numeric_limits<double>::infinity();
+  std::vector<std::pair<double, int>> candidates;  // (distance, tet) within the running tie band
   for (int r = 0; r <= maxRing; ++r) {
     for (int z = c0.z() - r; z <= c0.z() + r; ++z) {
       if (z < 0 || z >= dims_.z()) continue;
@@ -177,16 +186,11 @@ TetLocator::Hit TetLocator::findNearest(const Eigen::Vector3d& p) const {
               thi = thi.cwiseMax(nodes_.row(tets_(t, k)).transpose());
             }
             const double boxDist = (tlo - p).cwiseMax(p - thi).cwiseMax(0.0).norm();
-            if (boxDist >= best) continue;
+            if (boxDist > best + tieTolerance(best)) continue;
             const double d = distanceToTet(t, p);
-            if (d < best || (d == best && t < hit.tet)) {
-              const Eigen::Vector4d l = barycentric(t, p);
-              if (!l.allFinite()) continue;
-              best = d;
-              hit.tet = t;
-              hit.bary = l;
-              hit.distance = d;
-            }
+            if (d > best + tieTolerance(best)) continue;
+            best = std::min(best, d);
+            candidates.push_back({d, t});
           }
         }
       }
@@ -197,7 +201,22 @@ TetLocator::Hit TetLocator::findNearest(const Eigen::Vector3d& p) const {
       if (c0[a] - r - 1 >= 0) bound = std::min(bound, p[a] - (lo_[a] + (c0[a] - r) * h_));
       if (c0[a] + r + 1 < dims_[a]) bound = std::min(bound, lo_[a] + (c0[a] + r + 1) * h_ - p[a]);
     }
-    if (best <= bound) break;
+    if (best + tieTolerance(best) <= bound) break;
+  }
+  // The nearest point is usually a vertex or edge shared by many tets: among the (nearly) nearest,
+  // a well-shaped tet extrapolates stably, a sliver would amplify every later deformation.
+  double hitConditioning = std::numeric_limits<double>::infinity();
+  for (const auto& [d, t] : candidates) {
+    if (d > best + tieTolerance(best)) continue;
+    const Eigen::Vector4d l = barycentric(t, p);
+    if (!l.allFinite()) continue;
+    const double conditioning = l.cwiseAbs().maxCoeff();
+    if (conditioning < hitConditioning || (conditioning == hitConditioning && t < hit.tet)) {
+      hit.tet = t;
+      hit.bary = l;
+      hit.distance = d;
+      hitConditioning = conditioning;
+    }
   }
   return hit;
 }

@@ -22,7 +22,8 @@ class TetLocator {
 
   /// True and the containing tet if all barycentric coordinates of p are >= -eps in some tet.
   bool findContaining(const Eigen::Vector3d& p, Hit& hit, double eps = 1e-10) const;
-  /// The tet at minimal Euclidean distance from p (containing tets first); barycentric extrapolated.
+  /// The tet nearest to p (containing tets first), barycentric extrapolated. Among tets within 5 %
+  /// of the minimal distance, the one with the smallest largest |barycentric| wins (stable extrapolation).
   Hit findNearest(const Eigen::Vector3d& p) const;
 
   /// Barycentric coordinates of p with respect to tet t (affine, sums to 1).

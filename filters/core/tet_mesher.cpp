@@ -106,13 +106,22 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
   if (options.maxTetVolume < 0) throw std::invalid_argument("tet mesher: the maximum tet volume must be >= 0");
   checkClosedSurface(F);
 
+  // Seeds outside the surface's bounding box are dropped here: TetGen would discard them anyway,
+  // but a far point enlarges its working box and then its volume bound (-a) is not enforced.
+  const Eigen::RowVector3d lo = V.colwise().minCoeff(), hi = V.colwise().maxCoeff();
+  std::vector<Eigen::Index> keptSeeds;
+  for (Eigen::Index s = 0; s < seeds.rows(); ++s)
+    if ((seeds.row(s).array() >= lo.array()).all() && (seeds.row(s).array() <= hi.array()).all())
+      keptSeeds.push_back(s);
+
   tetgenio in, out;
   in.firstnumber = 0;
   // Surface points, then the seeds as isolated points (TetGen drops those outside the surface).
-  in.numberofpoints = int(V.rows() + seeds.rows());
+  in.numberofpoints = int(V.rows() + Eigen::Index(keptSeeds.size()));
   in.pointlist = new REAL[std::size_t(in.numberofpoints) * 3];
   std::copy(V.data(), V.data() + V.size(), in.pointlist);  // row-major #V by 3
-  if (seeds.rows() > 0) std::copy(seeds.data(), seeds.data() + seeds.size(), in.pointlist + V.size());
+  for (std::size_t s = 0; s < keptSeeds.size(); ++s)
+    for (int c = 0; c < 3; ++c) in.pointlist[V.size() + 3 * s + c] = seeds(keptSeeds[s], c);
   in.numberoffacets = int(F.rows());
   in.facetlist = new tetgenio::facet[std::size_t(F.rows())];
   for (Eigen::Index f = 0; f < F.rows(); ++f) {

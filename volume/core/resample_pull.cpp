@@ -22,6 +22,17 @@ constexpr double kBaryEps = 1e-7;
 // k-slices per slab: slabs are the unit of parallel work, each written by one thread only.
 constexpr int kSlabSlices = 16;
 constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+// Branch-free choice between doubles (data-dependent conditions in the scan loops mispredict often).
+inline double select(bool c, double a, double b) {
+  std::uint64_t x, y;
+  std::memcpy(&x, &a, 8);
+  std::memcpy(&y, &b, 8);
+  const std::uint64_t m = std::uint64_t(0) - std::uint64_t(c);
+  const std::uint64_t z = (x & m) | (y & ~m);
+  double r;
+  std::memcpy(&r, &z, 8);
+  return r;
+}
 // Per-voxel coverage marks of a slab.
 constexpr std::uint8_t kEmpty = 0, kCovered = 1, kExtrapolated = 2;
 
@@ -117,8 +128,10 @@ bool setupTet(const Vertices& p, const Vertices& r, const int restDims[3], TetSe
   return true;
 }
 
-// Calls emit(i0, i1, j, k) for every run of voxel centres (i0..i1, j, k), k in [k0, k1], with all
-// λ_a >= -kBaryEps. Each λ_a is linear in i along a row, so a run is an intersection of half-lines.
+// Calls emit(i0, i1, j, k, rk) for every run of voxel centres (i0..i1, j, k), k in [k0, k1], with all
+// λ_a >= -kBaryEps; rk = rest index of voxel (0, 0, k). Each λ_a is linear in i along a row, so a run
+// is an intersection of half-lines. Tets are a few voxels wide, so rows are short: the per-row work is
+// kept branch-free (fixed-size bound lists, integer rounding).
 template <class Emit>
 inline void scanTet(const TetSetup& s, int k0, int k1, int nx, int ny, Emit&& emit) {
   const double kb = std::max(double(k0), std::ceil(s.lo[2] - 1e-6));
@@ -126,17 +139,24 @@ inline void scanTet(const TetSetup& s, int k0, int k1, int nx, int ny, Emit&& em
   const double ib = std::max(0.0, std::ceil(s.lo[0] - 1e-6));
   const double ie = std::min(double(nx - 1), std::floor(s.hi[0] + 1e-6));
   if (kb > ke || ib > ie) return;
-  // Constraints by the sign of dλ/di: lower bounds, upper bounds, and row tests (λ constant along i).
-  int lower[4], upper[4], flat[4], nl = 0, nu = 0, nf = 0;
-  double negInv[4];
+  // Constraints by the sign of dλ/di: lower bounds i >= -λ_a(0, j, k) / g_a.x, upper bounds likewise,
+  // and flat ones (λ_a constant along rows), which restrict j instead. At most 3 lower and 3 upper;
+  // unused slots hold bounds that never bind.
+  int lower[3] = {-1, -1, -1}, upper[3] = {-1, -1, -1}, flat[4], nl = 0, nu = 0, nf = 0;
   for (int a = 0; a < 4; ++a) {
-    negInv[a] = s.g[a][0] != 0 ? -1.0 / s.g[a][0] : 0.0;
-    if (s.g[a][0] > 0)
+    if (s.g[a][0] > 0 && nl < 3)
       lower[nl++] = a;
-    else if (s.g[a][0] < 0)
+    else if (s.g[a][0] < 0 && nu < 3)
       upper[nu++] = a;
-    else
+    else if (s.g[a][0] == 0)
       flat[nf++] = a;
+  }
+  double bl[3] = {0, 0, 0}, bu[3] = {0, 0, 0}, nil[3], niu[3];
+  for (int q = 0; q < 3; ++q) {
+    nil[q] = lower[q] >= 0 ? -1.0 / s.g[lower[q]][0] : 0.0;
+    niu[q] = upper[q] >= 0 ? -1.0 / s.g[upper[q]][0] : 0.0;
+    if (lower[q] >= 0) bl[q] = s.g[lower[q]][1] * nil[q];
+    if (upper[q] >= 0) bu[q] = s.g[upper[q]][1] * niu[q];
   }
   double edgeDyDz[6];
   for (int e = 0; e < 6; ++e) {
@@ -144,52 +164,48 @@ inline void scanTet(const TetSetup& s, int k0, int k1, int nx, int ny, Emit&& em
     edgeDyDz[e] = std::abs(dz) > 1e-12 ? (s.vy[kEdges[e][1]] - s.vy[kEdges[e][0]]) / dz : 0.0;
   }
   for (int k = int(kb); k <= int(ke); ++k) {
-    // j-range of the cross-section at plane k (edge crossings), padded so rounding never drops a row;
-    // rows it adds needlessly come out empty below.
+    // j-range of the cross-section at plane k: crossings of the edges spanning k (an edge in the plane
+    // contributes its first vertex; the other is the crossing of its other edges), padded so rounding
+    // never drops a row; rows it adds needlessly come out empty below.
     double ylo = 1e300, yhi = -1e300;
     for (int e = 0; e < 6; ++e) {
       const int a = kEdges[e][0], b = kEdges[e][1];
       const double za = s.vz[a], zb = s.vz[b];
       const double zmin = std::min(za, zb), zmax = std::max(za, zb);
-      if (k < zmin - 1e-6 || k > zmax + 1e-6) continue;
-      if (zmax - zmin > 1e-12) {
-        const double y = s.vy[a] + (std::min(std::max(double(k), zmin), zmax) - za) * edgeDyDz[e];
-        ylo = std::min(ylo, y);
-        yhi = std::max(yhi, y);
-      } else {
-        ylo = std::min({ylo, s.vy[a], s.vy[b]});
-        yhi = std::max({yhi, s.vy[a], s.vy[b]});
-      }
+      const bool spans = (k >= zmin - 1e-6) & (k <= zmax + 1e-6);
+      const double y = s.vy[a] + (std::min(std::max(double(k), zmin), zmax) - za) * edgeDyDz[e];
+      ylo = std::min(ylo, select(spans, y, 1e300));
+      yhi = std::max(yhi, select(spans, y, -1e300));
     }
-    const double jb = std::max(0.0, std::ceil(ylo - 1e-4));
-    const double je = std::min(double(ny - 1), std::floor(yhi + 1e-4));
-    if (jb > je) continue;
-    // Bound lines i >= al + bl j (lower), i <= au + bu j (upper), and row tests af + bf j >= 0.
-    double al[4], bl[4], au[4], bu[4], af[4], bf[4];
-    for (int q = 0; q < nl; ++q) {
-      const int a = lower[q];
-      al[q] = (s.g[a][2] * k + s.c[a]) * negInv[a];
-      bl[q] = s.g[a][1] * negInv[a];
-    }
-    for (int q = 0; q < nu; ++q) {
-      const int a = upper[q];
-      au[q] = (s.g[a][2] * k + s.c[a]) * negInv[a];
-      bu[q] = s.g[a][1] * negInv[a];
-    }
-    for (int q = 0; q < nf; ++q) {
+    double jb = std::max(0.0, std::ceil(ylo - 1e-4));
+    double je = std::min(double(ny - 1), std::floor(yhi + 1e-4));
+    for (int q = 0; q < nf; ++q) {  // flat: λ = g.y j + g.z k + c >= 0
       const int a = flat[q];
-      af[q] = s.g[a][2] * k + s.c[a];
-      bf[q] = s.g[a][1];
+      const double base = s.g[a][2] * k + s.c[a];
+      if (s.g[a][1] > 0)
+        jb = std::max(jb, std::ceil(-base / s.g[a][1]));
+      else if (s.g[a][1] < 0)
+        je = std::min(je, std::floor(-base / s.g[a][1]));
+      else if (base < 0)
+        je = jb - 1;
     }
+    if (jb > je) continue;
+    double al[3], au[3];
+    for (int q = 0; q < 3; ++q) {
+      al[q] = lower[q] >= 0 ? (s.g[lower[q]][2] * k + s.c[lower[q]]) * nil[q] : -1e300;
+      au[q] = upper[q] >= 0 ? (s.g[upper[q]][2] * k + s.c[upper[q]]) * niu[q] : 1e300;
+    }
+    double rk[3];
+    for (int m = 0; m < 3; ++m) rk[m] = s.A[m][2] * k + s.b[m];
     for (int j = int(jb); j <= int(je); ++j) {
-      double lo = ib, hi = ie;
-      for (int q = 0; q < nl; ++q) lo = std::max(lo, al[q] + bl[q] * j);
-      for (int q = 0; q < nu; ++q) hi = std::min(hi, au[q] + bu[q] * j);
-      bool ok = true;
-      for (int q = 0; q < nf; ++q) ok = ok && af[q] + bf[q] * j >= 0;
-      lo = std::ceil(lo);
-      hi = std::floor(hi);
-      if (ok && lo <= hi) emit(int(lo), int(hi), j, k);
+      const double lo = std::max(std::max(ib, al[0] + bl[0] * j), std::max(al[1] + bl[1] * j, al[2] + bl[2] * j));
+      const double hi = std::min(std::min(ie, au[0] + bu[0] * j), std::min(au[1] + bu[1] * j, au[2] + bu[2] * j));
+      if (!(lo <= hi)) continue;
+      // 0 <= lo <= hi < nx here, so truncation is floor.
+      int i0 = int(lo);
+      i0 += double(i0) < lo;
+      const int i1 = int(hi);
+      if (i0 <= i1) emit(i0, i1, j, k, rk);
     }
   }
 }
@@ -355,10 +371,10 @@ Prepared prepare(const ImageGrid& restGrid, const Points& restNodes, const Point
 }
 
 // Runs both passes slab by slab. Kernel provides
-//   fill(begin, end)                      background into output voxels [begin, end)
-//   cover(s, i0, i1, j, k, row)           pass 1: write every voxel of the run (overwriting)
-//   extend(s, i0, i1, j, k, row, mark)    pass 2: write voxels whose mark is kEmpty, mark them
-// where row is the linear index of voxel (0, j, k). Pass 1 visits tets in decreasing order, so the
+//   fill(begin, end)                       background into output voxels [begin, end)
+//   cover(s, i0, i1, j, rk, row, mark)     pass 1: write and mark every voxel of the run (overwriting)
+//   extend(s, i0, i1, j, rk, row, mark)    pass 2: write voxels whose mark is kEmpty, mark them
+// where row is the linear index of voxel (0, j, k), mark the marks of that row. Pass 1 visits tets in decreasing order, so the
 // lowest-numbered tet covering a voxel writes last; pass 2 in increasing order, first writer wins.
 template <class Kernel>
 void run(const Prepared& pr, const Tets& tets, const Kernel& kernel, PullResampleReport* report,
@@ -385,10 +401,9 @@ void run(const Prepared& pr, const Tets& tets, const Kernel& kernel, PullResampl
         const std::size_t t = std::size_t(pr.tets.items[q1]);
         loadTet(pr, tets, t, p, r);
         if (!setupTet(p, r, pr.restDims, st)) continue;
-        scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k) {
+        scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k, const double* rk) {
           const std::size_t row = std::size_t(k) * sliceSize + std::size_t(j) * nx;
-          std::memset(mark + (row - slabBase) + i0, kCovered, std::size_t(i1 - i0 + 1));
-          kernel.cover(st, i0, i1, j, k, row);
+          kernel.cover(st, i0, i1, j, rk, row, mark + (row - slabBase));
         });
       }
       if (!pr.ext.offset.empty()) {
@@ -398,16 +413,19 @@ void run(const Prepared& pr, const Tets& tets, const Kernel& kernel, PullResampl
           inflate(p, &pr.extDelta[4 * x], q);
           inflate(r, &pr.extDelta[4 * x], qr);
           if (!setupTet(q, qr, pr.restDims, st)) continue;
-          scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k) {
+          scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k, const double* rk) {
             const std::size_t row = std::size_t(k) * sliceSize + std::size_t(j) * nx;
-            kernel.extend(st, i0, i1, j, k, row, mark + (row - slabBase));
+            kernel.extend(st, i0, i1, j, rk, row, mark + (row - slabBase));
           });
         }
       }
+      std::uint32_t c = 0, x = 0;  // per slab: fits, and lets the loop vectorize
       for (std::size_t v = 0; v < slabVoxels; ++v) {
-        localCovered += mark[v] == kCovered;
-        localExtrapolated += mark[v] == kExtrapolated;
+        c += mark[v] == kCovered;
+        x += mark[v] == kExtrapolated;
       }
+      localCovered += c;
+      localExtrapolated += x;
     }
     covered += localCovered;
     extrapolated += localExtrapolated;
@@ -421,9 +439,9 @@ void run(const Prepared& pr, const Tets& tets, const Kernel& kernel, PullResampl
   }
 }
 
-// Rest index of voxel (i0, j, k) under the tet's map, plus `offset` on every axis.
-inline void restStart(const TetSetup& s, int i0, int j, int k, double offset, double r[3]) {
-  for (int m = 0; m < 3; ++m) r[m] = s.A[m][0] * i0 + s.A[m][1] * j + s.A[m][2] * k + s.b[m] + offset;
+// Rest index of voxel (i0, j, k) under the tet's map (rk: that of (0, 0, k)), plus `offset` on every axis.
+inline void restStart(const TetSetup& s, int i0, int j, const double* rk, double offset, double r[3]) {
+  for (int m = 0; m < 3; ++m) r[m] = rk[m] + s.A[m][1] * j + s.A[m][0] * i0 + offset;
 }
 
 struct LabelKernel {
@@ -443,21 +461,26 @@ struct LabelKernel {
   std::size_t index(const double r[3]) const {
     return (std::size_t(int(r[2])) * std::size_t(dy) + std::size_t(int(r[1]))) * std::size_t(dx) + std::size_t(int(r[0]));
   }
-  void cover(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row) const {
+  void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark) const {
     double r[3];
-    restStart(s, i0, j, k, 0.5, r);
+    restStart(s, i0, j, rk, 0.5, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
     std::int32_t* d = dst + row;
     if (s.restInside) {
-      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) d[i] = src[index(r)];
+      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
+        d[i] = src[index(r)];
+        mark[i] = kCovered;
+      }
     } else {
-      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
+      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
         d[i] = inside(r) ? src[index(r)] : background;
+        mark[i] = kCovered;
+      }
     }
   }
-  void extend(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row, std::uint8_t* mark) const {
+  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark) const {
     double r[3];
-    restStart(s, i0, j, k, 0.5, r);
+    restStart(s, i0, j, rk, 0.5, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
     std::int32_t* d = dst + row;
     for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
@@ -505,17 +528,19 @@ struct IntensityKernel {
     const double c1 = c01 + f[1] * (c11 - c01);
     return float(c0 + f[2] * (c1 - c0));
   }
-  void cover(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row) const {
+  void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark) const {
     double r[3];
-    restStart(s, i0, j, k, 0.0, r);
+    restStart(s, i0, j, rk, 0.0, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
     float* d = dst + row;
-    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
+    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
       d[i] = s.restInside || inside(r) ? sample(r) : background;
+      mark[i] = kCovered;
+    }
   }
-  void extend(const TetSetup& s, int i0, int i1, int j, int k, std::size_t row, std::uint8_t* mark) const {
+  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark) const {
     double r[3];
-    restStart(s, i0, j, k, 0.0, r);
+    restStart(s, i0, j, rk, 0.0, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
     float* d = dst + row;
     for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
