@@ -73,9 +73,13 @@ TEST(Bvh, ParsesSmallFile) {
 TEST(Bvh, RejectsMalformedFilesWithLineNumbers) {
   // Frame count that does not match the rows (too few rows, too many rows).
   expectBvhError(smallBvh("CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation", "Frames: 3"),
-                 {"line 20", "Frames: 3", "line 17", "only 2 frame rows"});
+                 {"line 20", "Frames: 3", "line 17", "only 2 frame row(s)"});
   expectBvhError(smallBvh("CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation", "Frames: 1"),
                  {"line 20", "more frame rows"});
+  expectBvhError(smallBvh("CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation", "Frames: 99999999"),
+                 {"line 20", "only 2 frame row(s)"});  // and no huge allocation
+  expectBvhError(smallBvh("CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation", "Frames: two"),
+                 {"line 17", "bad frame count"});
   // Missing MOTION section.
   {
     std::string text = smallBvh();
@@ -199,6 +203,11 @@ TEST(Bvh, ReadsCmuShortMotionBuilderConversion) {
   EXPECT_GE(m.find("LeftArm"), 0);
   EXPECT_GE(m.find("LeftForeArm"), 0);
   EXPECT_DOUBLE_EQ(m.joints[m.find("LeftUpLeg")].offset.x(), 3.13874);
+  // First row starts "34.0924 14.783 2.9468"; the last row ends "4.5838 -42.6201 0.2698".
+  const auto pose = repose::bvhGlobalPose(m, 0);
+  EXPECT_LT((pose[0].translation() - Eigen::Vector3d(34.0924, 14.783, 2.9468)).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(m.frames(74, 95), 0.2698);
+  EXPECT_DOUBLE_EQ(m.frames(74, 94), -42.6201);
 }
 
 TEST(Bvh, MissingFileNamesThePath) {

@@ -1,5 +1,6 @@
 #include "bvh.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -259,7 +260,7 @@ BvhMotion parseBvh(const std::string& text, const std::string& sourceName) {
   if (t.text.empty()) lex.fail(t.line, "missing MOTION section after the hierarchy (end of file)");
   if (t.text != "MOTION") lex.fail(t.line, "missing MOTION section: expected MOTION, found " + quoted(t.text));
 
-  // "Frames: N" (also "Frames:N" split oddly is not BVH; keep strict but tolerant of "Frames :").
+  // "Frames: N" (also accepts "Frames : N").
   t = lex.next();
   const int framesLine = t.line;
   std::string_view framesValue;
@@ -289,7 +290,9 @@ BvhMotion parseBvh(const std::string& text, const std::string& sourceName) {
   motion.frameCount = int(frames);
   motion.frameTime = frameTime;
   const int columns = channelCount;
-  motion.frames.resize(frames, columns);
+  // A row of c values takes at least 2c-1 characters: never allocate for rows the text cannot hold.
+  const long maxRows = columns > 0 ? long(lex.end() - lex.position()) / (2 * columns - 1) + 1 : frames;
+  motion.frames.resize(std::min(frames, maxRows), columns);
 
   // Frame rows: one per non-blank line, exactly `columns` numbers each.
   const char* p = lex.position();
@@ -303,7 +306,7 @@ BvhMotion parseBvh(const std::string& text, const std::string& sourceName) {
     const char* q = p;
     while (q != lineEnd && isSpace(*q)) ++q;
     if (q != lineEnd) {
-      if (row >= frames)
+      if (row >= motion.frames.rows())
         lex.fail(line, "more frame rows than 'Frames: " + std::to_string(frames) + "' at line " +
                            std::to_string(framesLine) + " declares");
       double* out = columns > 0 ? motion.frames.row(row).data() : nullptr;
@@ -335,7 +338,7 @@ BvhMotion parseBvh(const std::string& text, const std::string& sourceName) {
   }
   if (row != frames)
     lex.fail(lastLine, "'Frames: " + std::to_string(frames) + "' at line " + std::to_string(framesLine) +
-                           " but only " + std::to_string(row) + " frame rows follow (the last ends at line " +
+                           " but only " + std::to_string(row) + " frame row(s) follow (the last ends at line " +
                            std::to_string(lastLine) + ")");
   return motion;
 }
