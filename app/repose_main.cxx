@@ -1,7 +1,11 @@
 // The `repose` command line: demo, phantom, prepare, pose.
+#include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <memory>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -12,7 +16,10 @@
 #include <unistd.h>
 #include <vector>
 
+#include <vtkDataArray.h>
 #include <vtkImageData.h>
+#include <vtkIntArray.h>
+#include <vtkPointData.h>
 #include <vtkLogger.h>
 #include <vtkNew.h>
 #include <vtkObject.h>
@@ -21,9 +28,13 @@
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 
+#include "vtkReposeAutoRig.h"
 #include "vtkReposePhantomSource.h"
 
 #include "atomic_outputs.h"
+#include "bvh.h"
+#include "pvd_series.h"
+#include "retarget.h"
 #include "pose.h"
 #include "render_snapshot.h"
 #include "repose_pipeline.h"
@@ -95,7 +106,9 @@ const char* kMainUsage =
     "  demo      built-in phantom -> prepare -> pose; writes every output and render.png\n"
     "  phantom   write the built-in phantom's labels.nii.gz and skeleton.json\n"
     "  prepare   mesh a label volume, compute bone weights and bind surfaces (once per scan)\n"
-    "  pose      pose a prepared case: posed label volume, mesh and surfaces\n\n"
+    "  pose      pose a prepared case: posed label volume, mesh and surfaces\n"
+    "  animate   drive a prepared case with a BVH motion clip: a ParaView time series\n"
+    "  rig       find the joints from the bone labels and write an editable skeleton.json\n\n"
     "Run 'repose COMMAND --help' for the options of a command.\n";
 
 const char* kDemoUsage =
@@ -111,11 +124,24 @@ const char* kPhantomUsage =
     "usage: repose phantom --out DIR [--size tiny|small|medium|large]\n"
     "  Writes DIR/labels.nii.gz, DIR/skeleton.json and DIR/labels.tsv (label table).\n";
 
+const char* kRigUsage =
+    "usage: repose rig --labels FILE [--label-table FILE] --out skeleton.json [--max-gap MM]\n"
+    "  Finds the joint centres from the bone labels (ball joints by sphere fits to the femoral and humeral\n"
+    "  heads, other joints where adjacent bones come closest), builds the tree from the bone adjacency\n"
+    "  rooted at the pelvis and names the joints so motion can be mapped onto them. Labels holding\n"
+    "  several bones are split into connected components; then the relabelled volume is written beside\n"
+    "  the skeleton (labels_rigged.nii.gz) and the skeleton refers to it. Bones cut by the field of view\n"
+    "  and missing bones are reported. TotalSegmentator's class names are known without a table.\n"
+    "  --label-table FILE  value<TAB>name[<TAB>bone|soft|background] lines\n"
+    "  --max-gap MM        largest gap between bones that still makes a joint (default 6)\n";
+
 const char* kPrepareUsage =
-    "usage: repose prepare --labels FILE --skeleton FILE [--image CT_FILE] --out CASE_DIR [options]\n"
+    "usage: repose prepare --labels FILE --skeleton FILE|auto [--image CT_FILE] --out CASE_DIR [options]\n"
     "  Meshes the body with TetGen, solves Laplace's equation for the bone weights and binds the skin\n"
     "  and bone surfaces to the mesh. CASE_DIR then holds mesh.vtu, surfaces.vtp, skeleton.json,\n"
     "  labels.<ext> and manifest.json (ParaView opens the .vtu/.vtp as they are).\n"
+    "  --skeleton auto         find the skeleton from the bone labels (see 'repose rig')\n"
+    "  --label-table FILE      label names and kinds, for --skeleton auto\n"
     "  --image FILE            CT on the label grid: the body is the labels united with CT above the threshold\n"
     "  --body-threshold HU     default -500\n"
     "  --mesh-spacing MM       mesh the body on this voxel size (default: the label spacing); coarser = fewer tets\n"
@@ -128,6 +154,20 @@ const char* kPoseUsage =
     "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels.\n";
+
+const char* kAnimateUsage =
+    "usage: repose animate --case CASE_DIR --bvh FILE --out DIR [--map FILE] [--frames START:STOP:STEP]\n"
+    "                      [--skinning dqs|lbs] [--volumes] [--mode direction|relative] [--reference-frame N]\n"
+    "                      [--no-root-motion] [--unit-mm MM]\n"
+    "  Retargets every selected frame of the clip onto the case's skeleton and writes the posed mesh and\n"
+    "  surfaces per frame (DIR/frames/), DIR/animation.pvd (open it in ParaView) and DIR/frames.csv (per\n"
+    "  frame: body volume ratio, posing time and, with --volumes, each label's voxel-count ratio).\n"
+    "  --map FILE        JSON {BVH joint: skeleton joint}; default: CMU names onto the standard joint names\n"
+    "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
+    "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNN.nii.gz)\n"
+    "  --mode            direction (default): each bone points where the BVH bone points; relative:\n"
+    "                    each joint's rotation relative to --reference-frame (default 0)\n"
+    "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n";
 
 void printTimings(const repose::Pipeline& pipeline, std::size_t from = 0) {
   const auto& t = pipeline.timings();
@@ -209,6 +249,56 @@ void prepareCase(repose::Pipeline& pipeline, vtkImageData* labels, const std::st
   for (const auto& line : pipeline.reportLines()) std::cout << "  " << line << "\n";
 }
 
+struct RigResult {
+  vtkSmartPointer<vtkImageData> labels;  // relabelled when a label held several bones
+  std::string skeletonJson, report, tableTsv;
+  bool relabelled = false;
+};
+
+RigResult rigLabels(vtkImageData* labels, const std::string& labelsName, const Options& o) {
+  auto rig = vtkSmartPointer<vtkReposeAutoRig>::New();
+  rig->SetInputData(labels);
+  if (o.has("label-table")) rig->SetLabelTableTSV(repose::readTextFile(o.get("label-table")).c_str());
+  if (o.has("max-gap")) rig->SetMaxGapMm(o.number("max-gap", 6));
+  const std::string what = "automatic skeleton of " + labelsName;
+  repose::updateOrThrow(rig, what);
+  RigResult r;
+  r.labels = vtkSmartPointer<vtkImageData>::New();
+  r.labels->ShallowCopy(rig->GetOutput());
+  r.skeletonJson = rig->GetSkeletonJSON();
+  r.report = rig->GetReport();
+  r.tableTsv = rig->GetOutputLabelTableTSV();
+  if (rig->GetNumberOfJoints() < 2)
+    throw std::runtime_error(labelsName + ": the automatic skeleton found " + std::to_string(rig->GetNumberOfJoints()) +
+                             " joint(s); name the bones with --label-table or write skeleton.json by hand");
+  vtkDataArray* a = labels->GetPointData()->GetScalars();
+  vtkDataArray* b = r.labels->GetPointData()->GetScalars();
+  for (vtkIdType i = 0, n = a->GetNumberOfTuples(); i < n && !r.relabelled; ++i)
+    r.relabelled = a->GetTuple1(i) != b->GetTuple1(i);
+  return r;
+}
+
+int runRig(const Options& o) {
+  if (o.help) return std::cout << kRigUsage, 0;
+  const std::string labelsPath = o.require("labels");
+  const std::string outPath = o.require("out");
+  auto labels = repose::readLabelVolume(labelsPath);
+  const RigResult r = rigLabels(labels, labelsPath, o);
+  const std::filesystem::path out(outPath);
+  const std::string dir = out.has_parent_path() ? out.parent_path().string() : ".";
+  repose::AtomicOutputs files(dir);
+  repose::writeTextFile(files.stage(out.filename().string()), r.skeletonJson);
+  if (r.relabelled) {
+    repose::writeImage(r.labels, files.stage("labels_rigged.nii.gz"));
+    repose::writeTextFile(files.stage("labels_rigged.tsv"), r.tableTsv);
+  }
+  files.commit();
+  std::cout << r.report;
+  std::cout << "skeleton written to " << outPath
+            << (r.relabelled ? " (it refers to the relabelled " + dir + "/labels_rigged.nii.gz)" : std::string()) << "\n";
+  return 0;
+}
+
 int runPrepare(const Options& o) {
   if (o.help) return std::cout << kPrepareUsage, 0;
   const std::string labelsPath = o.require("labels");
@@ -216,13 +306,23 @@ int runPrepare(const Options& o) {
   const std::string caseDir = o.require("out");
   repose::Pipeline pipeline;
   pipeline.setProgress([](const std::string& s) { std::cout << "prepare: " << s << "..." << std::endl; });
-  auto labels = repose::readLabelVolume(labelsPath);
-  const std::string skeletonJson = repose::readTextFile(skeletonPath);
+  vtkSmartPointer<vtkImageData> labels = repose::readLabelVolume(labelsPath);
+  std::string skeletonJson;
+  if (skeletonPath == "auto") {
+    std::cout << "prepare: finding the skeleton from the bone labels..." << std::endl;
+    const RigResult r = rigLabels(labels, labelsPath, o);
+    std::cout << r.report;
+    labels = r.labels;
+    skeletonJson = r.skeletonJson;
+  } else {
+    skeletonJson = repose::readTextFile(skeletonPath);
+  }
   vtkSmartPointer<vtkImageData> image;
   if (o.has("image")) image = repose::readIntensityImage(o.get("image"));
   std::string ext = repose::imageExtension(labelsPath);
   if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha") ext = ".nii.gz";
-  prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath, image, o.get("image"), o, caseDir, ext);
+  prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath == "auto" ? "automatic skeleton" : skeletonPath,
+              image, o.get("image"), o, caseDir, ext);
   std::cout << "prepared case written to " << caseDir << "\n";
   printTimings(pipeline);
   return 0;
@@ -258,6 +358,136 @@ int runPose(const Options& o) {
   out.commit();
   std::cout << "posed outputs written to " << outDir << "\n";
   printTimings(pipeline);
+  return 0;
+}
+
+struct FrameRange {
+  int start = 0, stop = -1, step = 1;
+};
+
+FrameRange parseFrames(const std::string& text, int frameCount) {
+  FrameRange r;
+  r.stop = frameCount;
+  if (text.empty()) return r;
+  std::vector<std::string> parts;
+  std::stringstream in(text);
+  for (std::string p; std::getline(in, p, ':');) parts.push_back(p);
+  if (parts.empty() || parts.size() > 3) throw UsageError("--frames needs START:STOP:STEP, not '" + text + "'");
+  auto number = [&](const std::string& p, int fallback) {
+    if (p.empty()) return fallback;
+    char* end = nullptr;
+    const long v = std::strtol(p.c_str(), &end, 10);
+    if (*end != '\0') throw UsageError("--frames needs whole numbers, not '" + text + "'");
+    return static_cast<int>(v);
+  };
+  r.start = number(parts[0], 0);
+  if (parts.size() > 1) r.stop = std::min(number(parts[1], frameCount), frameCount);
+  if (parts.size() > 2) r.step = number(parts[2], 1);
+  if (r.start < 0 || r.start >= frameCount || r.step < 1 || r.stop <= r.start)
+    throw UsageError("--frames " + text + " selects no frame of a clip with " + std::to_string(frameCount) + " frames");
+  return r;
+}
+
+std::map<int, long> labelCounts(vtkImageData* labels) {
+  std::map<int, long> counts;
+  vtkDataArray* a = labels->GetPointData()->GetScalars();
+  const vtkIdType n = a->GetNumberOfTuples();
+  if (auto* ints = vtkIntArray::SafeDownCast(a)) {
+    const int* p = ints->GetPointer(0);
+    for (vtkIdType i = 0; i < n; ++i)
+      if (p[i] != 0) ++counts[p[i]];
+  } else {
+    for (vtkIdType i = 0; i < n; ++i)
+      if (a->GetTuple1(i) != 0) ++counts[static_cast<int>(a->GetTuple1(i))];
+  }
+  return counts;
+}
+
+int runAnimate(const Options& o) {
+  if (o.help) return std::cout << kAnimateUsage, 0;
+  const std::string caseDir = o.require("case");
+  const std::string bvhPath = o.require("bvh");
+  const std::string outDir = o.require("out");
+  repose::Pipeline pipeline;
+  pipeline.loadCase(caseDir);
+  pipeline.setSkinningMethod(o.get("skinning", "dqs"));
+  const repose::Skeleton skeleton = repose::parseSkeletonJson(pipeline.skeletonJson());
+
+  repose::BvhMotion motion;
+  try {
+    motion = repose::readBvhFile(bvhPath);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  repose::BvhJointMap map;
+  try {
+    map = o.has("map") ? repose::readJointMapFile(o.get("map")) : repose::defaultCmuJointMap(motion, skeleton);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error((o.has("map") ? o.get("map") + ": " : bvhPath + ": ") + e.what());
+  }
+  repose::RetargetOptions options;
+  options.mode = repose::parseRetargetMode(o.get("mode", "direction"));
+  options.referenceFrame = static_cast<int>(o.number("reference-frame", 0));
+  options.translateRoot = !o.has("no-root-motion");
+  options.unitScaleMm = o.number("unit-mm", options.unitScaleMm);
+  std::unique_ptr<repose::BvhRetargeter> retargeter;
+  try {
+    retargeter = std::make_unique<repose::BvhRetargeter>(motion, skeleton, map, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(bvhPath + ": " + e.what());
+  }
+  const FrameRange range = parseFrames(o.get("frames"), motion.frameCount);
+  const bool volumes = o.has("volumes");
+
+  repose::AtomicOutputs out(outDir);
+  repose::makeDirectories(out.stage("frames"));
+  const double restVolume = pipeline.restMeshVolume();
+  std::map<int, long> restCounts;
+  if (volumes) restCounts = labelCounts(pipeline.restLabels());
+  std::vector<repose::PvdEntry> entries;
+  std::ostringstream csv;
+  csv << "frame,time_s,body_volume_ratio,posing_ms";
+  for (const auto& [label, count] : restCounts) csv << ",label_" << label << "_ratio";
+  csv << "\n";
+  int written = 0;
+  double totalPosing = 0, worstPosing = 0;
+  for (int f = range.start; f < range.stop; f += range.step) {
+    char name[64];
+    const auto t0 = std::chrono::steady_clock::now();
+    pipeline.setPose(retargeter->pose(f));
+    vtkUnstructuredGrid* mesh = pipeline.posedMesh();
+    vtkPolyData* surfaces = pipeline.posedSurfaces();
+    vtkImageData* labels = volumes ? pipeline.posedLabels() : nullptr;
+    const double posing = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    totalPosing += posing;
+    worstPosing = std::max(worstPosing, posing);
+    const double time = f * motion.frameTime;
+    std::snprintf(name, sizeof(name), "frames/mesh_%05d.vtu", f);
+    repose::writeMesh(mesh, out.stage(name));
+    entries.push_back({time, 0, name});
+    std::snprintf(name, sizeof(name), "frames/surfaces_%05d.vtp", f);
+    repose::writeSurfaces(surfaces, out.stage(name));
+    entries.push_back({time, 1, name});
+    csv << f << "," << time << "," << pipeline.posedMeshVolume() / restVolume << "," << posing * 1e3;
+    if (labels) {
+      std::snprintf(name, sizeof(name), "frames/labels_%05d.nii.gz", f);
+      repose::writeImage(labels, out.stage(name));
+      const auto counts = labelCounts(labels);
+      for (const auto& [label, count] : restCounts) {
+        auto it = counts.find(label);
+        csv << "," << double(it == counts.end() ? 0 : it->second) / double(count);
+      }
+    }
+    csv << "\n";
+    ++written;
+    if (written % 10 == 0) std::cout << "animate: " << written << " frames..." << std::endl;
+  }
+  repose::writeTextFile(out.stage("animation.pvd"), repose::pvdText(entries));
+  repose::writeTextFile(out.stage("frames.csv"), csv.str());
+  out.commit();
+  std::cout << "animate: " << written << " frames of " << bvhPath << " written to " << outDir << " (posing "
+            << std::fixed << std::setprecision(1) << 1e3 * totalPosing / std::max(written, 1) << " ms mean, "
+            << 1e3 * worstPosing << " ms worst per frame" << (volumes ? ", with the label volume" : "") << ")\n";
   return 0;
 }
 
@@ -356,10 +586,16 @@ int main(int argc, char** argv) {
     if (command == "prepare")
       return runPrepare(Options(argc, argv, 2,
                                 {"labels", "skeleton", "image", "out", "body-threshold", "mesh-spacing", "quality",
-                                 "influences", "surface-reduction"},
+                                 "influences", "surface-reduction", "label-table", "max-gap"},
                                 none));
     if (command == "pose")
       return runPose(Options(argc, argv, 2, {"case", "pose", "out", "skinning", "image", "format"}, none));
+    if (command == "rig") return runRig(Options(argc, argv, 2, {"labels", "label-table", "out", "max-gap"}, none));
+    if (command == "animate")
+      return runAnimate(Options(argc, argv, 2,
+                                {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
+                                 "unit-mm"},
+                                {"volumes", "no-root-motion"}));
     throw UsageError("unknown command '" + command + "' (see repose --help)");
   } catch (const UsageError& e) {
     std::cerr << "repose: error: " << e.what() << "\n";

@@ -12,7 +12,9 @@
 #include <vtkCommand.h>
 #include <vtkDataArray.h>
 #include <vtkExecutive.h>
+#include <vtkIdList.h>
 #include <vtkImageData.h>
+#include <vtkPoints.h>
 #include <vtkIntArray.h>
 #include <vtkMatrix3x3.h>
 #include <vtkPointData.h>
@@ -36,6 +38,7 @@
 #include "atomic_outputs.h"
 #include "pose.h"
 #include "skeleton.h"
+#include "tet_mesh.h"
 
 namespace repose {
 namespace {
@@ -81,16 +84,6 @@ vtkSmartPointer<ErrorCapture> captureErrors(vtkAlgorithm* filter) {
   auto capture = vtkSmartPointer<ErrorCapture>::New();
   filter->AddObserver(vtkCommand::ErrorEvent, capture);
   return capture;
-}
-
-/// Runs a filter; throws with the filter's own error message when it fails.
-void updateOrThrow(vtkAlgorithm* filter, const std::string& what) {
-  auto capture = vtkSmartPointer<ErrorCapture>::New();
-  const unsigned long tag = filter->AddObserver(vtkCommand::ErrorEvent, capture);
-  const int ok = filter->GetExecutive()->Update();
-  filter->RemoveObserver(tag);
-  if (!ok || !capture->last.empty())
-    throw std::runtime_error(what + " failed" + (capture->last.empty() ? std::string() : ": " + capture->last));
 }
 
 /// Checks a filter ran; the filters report core errors through vtkErrorMacro and an empty output.
@@ -198,6 +191,15 @@ void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImage
   if (!same)
     throw std::runtime_error(imageName + " and " + labelsName + " are on different grids (" +
                              describeGrid(image) + " vs " + describeGrid(labels) + ")");
+}
+
+void updateOrThrow(vtkAlgorithm* filter, const std::string& what) {
+  auto capture = vtkSmartPointer<ErrorCapture>::New();
+  const unsigned long tag = filter->AddObserver(vtkCommand::ErrorEvent, capture);
+  const int ok = filter->GetExecutive()->Update();
+  filter->RemoveObserver(tag);
+  if (!ok || !capture->last.empty())
+    throw std::runtime_error(what + " failed" + (capture->last.empty() ? std::string() : ": " + capture->last));
 }
 
 Pipeline::Pipeline() = default;
@@ -414,6 +416,44 @@ void Pipeline::setPose(const std::string& poseJson, const std::string& poseName)
   skinning_->SetPoseJSON(poseJson.c_str());
 }
 
+void Pipeline::setPose(const Pose& pose) {
+  if (!skinning_) throw std::runtime_error("no case loaded");
+  skinning_->SetPoseJSON(poseToJson(pose).c_str());
+}
+
+namespace {
+double signedVolume(vtkPoints* points, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& tets) {
+  Points nodes(points->GetNumberOfPoints(), 3);
+  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
+    double x[3];
+    points->GetPoint(i, x);
+    nodes.row(i) << x[0], x[1], x[2];
+  }
+  return meshVolume(nodes, tets);
+}
+}  // namespace
+
+double Pipeline::restMeshVolume() {
+  if (!restMesh_) throw std::runtime_error("no case loaded");
+  if (tets_.rows() != restMesh_->GetNumberOfCells()) {
+    tets_.resize(restMesh_->GetNumberOfCells(), 4);
+    auto ids = vtkSmartPointer<vtkIdList>::New();
+    for (vtkIdType c = 0; c < restMesh_->GetNumberOfCells(); ++c) {
+      restMesh_->GetCellPoints(c, ids);
+      if (ids->GetNumberOfIds() != 4) throw std::runtime_error("the case's mesh has a cell that is not a tetrahedron");
+      for (int k = 0; k < 4; ++k) tets_(c, k) = static_cast<int>(ids->GetId(k));
+    }
+  }
+  return signedVolume(restMesh_->GetPoints(), tets_);
+}
+
+double Pipeline::posedMeshVolume() {
+  restMeshVolume();  // makes sure the connectivity is cached
+  return signedVolume(posedMesh()->GetPoints(), tets_);
+}
+
+double Pipeline::lastSkinningSeconds() const { return skinning_ ? skinning_->GetLastSkinningTime() : 0.0; }
+
 void Pipeline::setSkinningMethod(const std::string& method) {
   if (!skinning_) throw std::runtime_error("no case loaded");
   if (method == "dqs")
@@ -439,35 +479,36 @@ void Pipeline::setRestImage(vtkImageData* image, const std::string& imageName) {
   imageResampler_->SetBackgroundValue(range[0]);
 }
 
-vtkUnstructuredGrid* Pipeline::posedMesh() {
+/// Runs a posing filter and records its time, only when it actually executed (the pipeline
+/// skips filters whose inputs did not change).
+void Pipeline::runStage(vtkAlgorithm* filter, const std::string& stage) {
+  const vtkMTimeType before = filter->GetOutputDataObject(0) ? filter->GetOutputDataObject(0)->GetMTime() : 0;
   auto t0 = Clock::now();
-  updateOrThrow(skinning_, "skinning");
-  timed("skinning", secondsSince(t0));
+  updateOrThrow(filter, stage);
+  if (filter->GetOutputDataObject(0)->GetMTime() != before) timed(stage, secondsSince(t0));
+}
+
+vtkUnstructuredGrid* Pipeline::posedMesh() {
+  runStage(skinning_, "skinning");
   return skinning_->GetOutput();
 }
 
 vtkPolyData* Pipeline::posedSurfaces() {
   posedMesh();
-  auto t0 = Clock::now();
-  updateOrThrow(deformer_, "posed surfaces");
-  timed("posed surfaces", secondsSince(t0));
+  runStage(deformer_, "posed surfaces");
   return deformer_->GetOutput();
 }
 
 vtkImageData* Pipeline::posedLabels() {
   posedMesh();
-  auto t0 = Clock::now();
-  updateOrThrow(labelResampler_, "posed label volume");
-  timed("posed labels", secondsSince(t0));
+  runStage(labelResampler_, "posed labels");
   return labelResampler_->GetOutput();
 }
 
 vtkImageData* Pipeline::posedImage() {
   if (!imageResampler_) return nullptr;
   posedMesh();
-  auto t0 = Clock::now();
-  updateOrThrow(imageResampler_, "posed image");
-  timed("posed image", secondsSince(t0));
+  runStage(imageResampler_, "posed image");
   return imageResampler_->GetOutput();
 }
 

@@ -6,8 +6,10 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
 #include <vtkSmartPointer.h>
 
+class vtkAlgorithm;
 class vtkImageData;
 class vtkPolyData;
 class vtkUnstructuredGrid;
@@ -20,6 +22,8 @@ class vtkReposeSurfaceDeformer;
 class vtkReposePosedVolume;
 
 namespace repose {
+
+struct Pose;
 
 struct PrepareSettings {
   double bodyThreshold = -500.0;   ///< HU, with a CT image
@@ -43,6 +47,8 @@ vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path);
 void writeImage(vtkImageData* image, const std::string& path);
 void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path);
 void writeSurfaces(vtkPolyData* surfaces, const std::string& path);
+/// Runs a VTK filter; throws std::runtime_error "`what` failed: <the filter's own error>" on failure.
+void updateOrThrow(vtkAlgorithm* filter, const std::string& what);
 /// Throws std::runtime_error "LABEL_FILE and IMAGE_FILE are on different grids (...)".
 void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
                    const std::string& imageName);
@@ -69,6 +75,8 @@ public:
   // --- posing --------------------------------------------------------------------------------
   /// Validates (unknown joints, NaN, zero axis) and sets the pose; throws std::runtime_error.
   void setPose(const std::string& poseJson, const std::string& poseName);
+  /// Sets an already validated pose (e.g. retargeted from motion capture).
+  void setPose(const Pose& pose);
   void setSkinningMethod(const std::string& method);  ///< "dqs" | "lbs"
   /// Optional intensity image on the rest label grid, posed with trilinear sampling.
   void setRestImage(vtkImageData* image, const std::string& imageName);
@@ -77,6 +85,12 @@ public:
   vtkPolyData* posedSurfaces();
   vtkImageData* posedLabels();
   vtkImageData* posedImage();   ///< null without a rest image
+
+  /// Signed volume of the rest and of the posed tet mesh (mm^3).
+  double restMeshVolume();
+  double posedMeshVolume();
+  /// Seconds of the last skinning run alone (the interactive cost).
+  double lastSkinningSeconds() const;
 
   vtkUnstructuredGrid* restMesh() const { return restMesh_; }
   vtkPolyData* restSurfaces() const { return restSurfaces_; }
@@ -91,6 +105,7 @@ public:
 
 private:
   void connectPosing();
+  void runStage(vtkAlgorithm* filter, const std::string& stage);
   void note(const std::string& stage);
   void timed(const std::string& stage, double seconds);
 
@@ -103,6 +118,7 @@ private:
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;
   std::vector<StageTime> timings_;
+  Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> tets_;  // rest mesh connectivity, for volumes
   std::vector<std::string> report_;
 };
 

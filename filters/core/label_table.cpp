@@ -1,0 +1,194 @@
+#include "label_table.h"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace repose {
+
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// TotalSegmentator v2, task "total": class value i+1 is kTotalSegmentatorNames[i] (Apache-2.0).
+const char* const kTotalSegmentatorNames[] = {
+    "spleen", "kidney_right", "kidney_left", "gallbladder", "liver", "stomach", "pancreas",
+    "adrenal_gland_right", "adrenal_gland_left", "lung_upper_lobe_left", "lung_lower_lobe_left",
+    "lung_upper_lobe_right", "lung_middle_lobe_right", "lung_lower_lobe_right", "esophagus",
+    "trachea", "thyroid_gland", "small_bowel", "duodenum", "colon", "urinary_bladder", "prostate",
+    "kidney_cyst_left", "kidney_cyst_right", "sacrum", "vertebrae_S1", "vertebrae_L5",
+    "vertebrae_L4", "vertebrae_L3", "vertebrae_L2", "vertebrae_L1", "vertebrae_T12",
+    "vertebrae_T11", "vertebrae_T10", "vertebrae_T9", "vertebrae_T8", "vertebrae_T7",
+    "vertebrae_T6", "vertebrae_T5", "vertebrae_T4", "vertebrae_T3", "vertebrae_T2", "vertebrae_T1",
+    "vertebrae_C7", "vertebrae_C6", "vertebrae_C5", "vertebrae_C4", "vertebrae_C3", "vertebrae_C2",
+    "vertebrae_C1", "heart", "aorta", "pulmonary_vein", "brachiocephalic_trunk",
+    "subclavian_artery_right", "subclavian_artery_left", "common_carotid_artery_right",
+    "common_carotid_artery_left", "brachiocephalic_vein_left", "brachiocephalic_vein_right",
+    "atrial_appendage_left", "superior_vena_cava", "inferior_vena_cava",
+    "portal_vein_and_splenic_vein", "iliac_artery_left", "iliac_artery_right", "iliac_vena_left",
+    "iliac_vena_right", "humerus_left", "humerus_right", "scapula_left", "scapula_right",
+    "clavicula_left", "clavicula_right", "femur_left", "femur_right", "hip_left", "hip_right",
+    "spinal_cord", "gluteus_maximus_left", "gluteus_maximus_right", "gluteus_medius_left",
+    "gluteus_medius_right", "gluteus_minimus_left", "gluteus_minimus_right", "autochthon_left",
+    "autochthon_right", "iliopsoas_left", "iliopsoas_right", "brain", "skull", "rib_left_1",
+    "rib_left_2", "rib_left_3", "rib_left_4", "rib_left_5", "rib_left_6", "rib_left_7",
+    "rib_left_8", "rib_left_9", "rib_left_10", "rib_left_11", "rib_left_12", "rib_right_1",
+    "rib_right_2", "rib_right_3", "rib_right_4", "rib_right_5", "rib_right_6", "rib_right_7",
+    "rib_right_8", "rib_right_9", "rib_right_10", "rib_right_11", "rib_right_12", "sternum",
+    "costal_cartilages",
+};
+constexpr int kTotalSegmentatorCount = int(sizeof(kTotalSegmentatorNames) / sizeof(kTotalSegmentatorNames[0]));
+static_assert(kTotalSegmentatorCount == 117, "TotalSegmentator total task has 117 classes");
+
+// First '_'-separated token of bone names: TotalSegmentator's total and appendicular-bone classes
+// (vertebrae_L5, rib_left_3, hip_right, ...) and the built-in phantom's (spine, ribcage, femur_left).
+// Cartilage (costal_cartilages) is deliberately not bone: it bends.
+const std::set<std::string>& boneTokens() {
+  static const std::set<std::string> tokens = {
+      "sacrum",  "coccyx",   "skull",     "mandible",   "sternum",    "spine",       "ribcage",
+      "pelvis",  "hip",      "femur",     "humerus",    "scapula",    "clavicula",   "clavicle",
+      "rib",     "ribs",     "vertebra",  "vertebrae",  "tibia",      "fibula",      "patella",
+      "foot",    "hand",     "forearm",   "radius",     "ulna",       "carpal",      "carpals",
+      "metacarpal", "metacarpals", "tarsal", "tarsals", "metatarsal", "metatarsals", "phalanges",
+      "bone",    "bones",    "skeleton"};
+  return tokens;
+}
+
+std::vector<std::string> splitFields(const std::string& line) {
+  std::vector<std::string> fields;
+  if (line.find('\t') != std::string::npos) {
+    std::string field;
+    std::istringstream in(line);
+    while (std::getline(in, field, '\t')) {
+      const auto b = field.find_first_not_of(" \r");
+      const auto e = field.find_last_not_of(" \r");
+      fields.push_back(b == std::string::npos ? std::string() : field.substr(b, e - b + 1));
+    }
+    while (!fields.empty() && fields.back().empty()) fields.pop_back();
+  } else {
+    std::istringstream in(line);
+    std::string field;
+    while (in >> field) fields.push_back(field);
+  }
+  return fields;
+}
+
+bool parseInt(const std::string& s, int& value) {
+  if (s.empty()) return false;
+  std::size_t used = 0;
+  try {
+    const long v = std::stol(s, &used);
+    if (used != s.size() || v < 0 || v > 2147483647L) return false;
+    value = int(v);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+const LabelInfo* LabelTable::find(int value) const {
+  for (const LabelInfo& l : labels)
+    if (l.value == value) return &l;
+  return nullptr;
+}
+
+std::string LabelTable::nameOf(int value) const {
+  const LabelInfo* l = find(value);
+  return l ? l->name : "label_" + std::to_string(value);
+}
+
+LabelKind parseLabelKind(const std::string& text) {
+  const std::string t = lower(text);
+  if (t == "bone") return LabelKind::Bone;
+  if (t == "soft") return LabelKind::Soft;
+  if (t == "background") return LabelKind::Background;
+  throw std::invalid_argument("unknown label kind '" + text + "': use bone, soft or background");
+}
+
+const char* labelKindName(LabelKind kind) {
+  switch (kind) {
+    case LabelKind::Bone: return "bone";
+    case LabelKind::Soft: return "soft";
+    case LabelKind::Background: return "background";
+  }
+  return "soft";
+}
+
+LabelKind inferLabelKind(const std::string& name) {
+  const std::string n = lower(name);
+  if (n == "background" || n == "none" || n == "unlabeled" || n == "unlabelled" || n == "clear label")
+    return LabelKind::Background;
+  const std::string token = n.substr(0, n.find('_'));
+  return boneTokens().count(token) ? LabelKind::Bone : LabelKind::Soft;
+}
+
+LabelTable parseLabelTable(const std::string& text, const std::string& sourceName) {
+  LabelTable table;
+  std::set<int> seen;
+  std::istringstream in(text);
+  std::string line;
+  int lineNo = 0;
+  bool sawData = false;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    const std::vector<std::string> f = splitFields(line);
+    if (f.empty() || f[0][0] == '#') continue;
+    const std::string where = sourceName + " line " + std::to_string(lineNo) + ": ";
+    LabelInfo info;
+    if (!parseInt(f[0], info.value)) {
+      if (!sawData) {  // a header line
+        sawData = true;
+        continue;
+      }
+      throw std::invalid_argument(where + "bad label value '" + f[0] +
+                                  "' (expected a non-negative integer, then a tab and a name)");
+    }
+    sawData = true;
+    if (f.size() < 2 || f[1].empty())
+      throw std::invalid_argument(where + "label " + f[0] + " has no name (expected value<TAB>name[<TAB>kind])");
+    if (f.size() > 3)
+      throw std::invalid_argument(where + "too many fields (expected value<TAB>name[<TAB>kind])");
+    info.name = f[1];
+    try {
+      info.kind = f.size() == 3 ? parseLabelKind(f[2]) : inferLabelKind(info.name);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(where + e.what());
+    }
+    if (!seen.insert(info.value).second)
+      throw std::invalid_argument(where + "duplicate label value " + f[0]);
+    table.labels.push_back(info);
+  }
+  return table;
+}
+
+LabelTable readLabelTableFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument("cannot open label table '" + path + "'");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return parseLabelTable(ss.str(), path);
+}
+
+std::string labelTableToTsv(const LabelTable& table) {
+  std::ostringstream out;
+  out << "value\tname\tkind\n";
+  for (const LabelInfo& l : table.labels) out << l.value << '\t' << l.name << '\t' << labelKindName(l.kind) << '\n';
+  return out.str();
+}
+
+LabelTable builtinTotalSegmentatorTable() {
+  LabelTable table;
+  for (int i = 0; i < kTotalSegmentatorCount; ++i)
+    table.labels.push_back({i + 1, kTotalSegmentatorNames[i], inferLabelKind(kTotalSegmentatorNames[i])});
+  return table;
+}
+
+}  // namespace repose

@@ -1,0 +1,105 @@
+#include "vtkReposeAutoRig.h"
+
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkIntArray.h"
+#include "vtkMatrix3x3.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+
+#include "auto_rig.h"
+#include "label_table.h"
+#include "skeleton.h"
+
+#include <algorithm>
+#include <exception>
+
+vtkStandardNewMacro(vtkReposeAutoRig);
+
+vtkReposeAutoRig::vtkReposeAutoRig()
+{
+  this->SetNumberOfInputPorts(1);
+  this->SetNumberOfOutputPorts(1);
+}
+
+int vtkReposeAutoRig::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  this->SkeletonJSON.clear();
+  this->Report.clear();
+  this->OutputLabelTableTSV.clear();
+  this->NumberOfJoints = 0;
+  vtkImageData* input = vtkImageData::GetData(inputVector[0]);
+  vtkImageData* output = vtkImageData::GetData(outputVector);
+  vtkDataArray* scalars = input ? input->GetPointData()->GetScalars() : nullptr;
+  if (!scalars || scalars->GetNumberOfComponents() != 1 || !output)
+  {
+    vtkErrorMacro("the label image (input 0) has no single-component scalars");
+    return 0;
+  }
+  try
+  {
+    repose::LabelVolume labels;
+    int ext[6];
+    input->GetExtent(ext);
+    repose::ImageGrid& g = labels.grid;
+    g.dims = { ext[1] - ext[0] + 1, ext[3] - ext[2] + 1, ext[5] - ext[4] + 1 };
+    double origin[3];
+    input->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
+    const double* spacing = input->GetSpacing();
+    vtkMatrix3x3* d = input->GetDirectionMatrix();
+    for (int r = 0; r < 3; ++r)
+    {
+      g.origin[r] = origin[r];
+      g.spacing[r] = spacing[r];
+      for (int c = 0; c < 3; ++c)
+      {
+        g.direction(r, c) = d->GetElement(r, c);
+      }
+    }
+    const vtkIdType n = scalars->GetNumberOfTuples();
+    labels.data.resize(static_cast<std::size_t>(n));
+    for (vtkIdType p = 0; p < n; ++p)
+    {
+      labels.data[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(scalars->GetComponent(p, 0));
+    }
+    const repose::LabelTable table = this->LabelTableTSV.empty()
+      ? repose::builtinTotalSegmentatorTable()
+      : repose::parseLabelTable(this->LabelTableTSV, "LabelTableTSV");
+    repose::AutoRigOptions options;
+    options.maxGapMm = this->MaxGapMm;
+    options.maxGapVoxels = this->MaxGapVoxels;
+    const repose::AutoRigResult result = repose::autoRig(labels, table, options);
+
+    output->CopyStructure(input);
+    vtkNew<vtkIntArray> values;
+    values->SetName(scalars->GetName() ? scalars->GetName() : "Labels");
+    values->SetNumberOfTuples(n);
+    std::copy(result.labels.data.begin(), result.labels.data.end(), values->GetPointer(0));
+    output->GetPointData()->SetScalars(values);
+
+    this->SkeletonJSON = repose::skeletonToJson(result.skeleton);
+    this->Report = result.report.text();
+    this->OutputLabelTableTSV = repose::labelTableToTsv(result.table);
+    this->NumberOfJoints = static_cast<int>(result.skeleton.size());
+    this->Seconds = result.report.seconds;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  return 1;
+}
+
+void vtkReposeAutoRig::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "LabelTableTSV: " << (this->LabelTableTSV.empty() ? "(TotalSegmentator)" : "(given)") << "\n";
+  os << indent << "MaxGapMm: " << this->MaxGapMm << "\n";
+  os << indent << "MaxGapVoxels: " << this->MaxGapVoxels << "\n";
+  os << indent << "NumberOfJoints: " << this->NumberOfJoints << "\n";
+}
