@@ -157,14 +157,16 @@ const char* kPoseUsage =
 
 const char* kAnimateUsage =
     "usage: repose animate --case CASE_DIR --bvh FILE --out DIR [--map FILE] [--frames START:STOP:STEP]\n"
-    "                      [--skinning dqs|lbs] [--volumes] [--mode direction|relative] [--reference-frame N]\n"
+    "                      [--skinning dqs|lbs] [--volumes] [--image FILE] [--mode direction|relative]\n"
+    "                      [--reference-frame N]\n"
     "                      [--no-root-motion] [--unit-mm MM]\n"
     "  Retargets every selected frame of the clip onto the case's skeleton and writes the posed mesh and\n"
     "  surfaces per frame (DIR/frames/), DIR/animation.pvd (open it in ParaView) and DIR/frames.csv (per\n"
     "  frame: body volume ratio, posing time and, with --volumes, each label's voxel-count ratio).\n"
     "  --map FILE        JSON {BVH joint: skeleton joint}; default: CMU names onto the standard joint names\n"
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
-    "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNN.nii.gz)\n"
+    "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
+    "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*)\n"
     "  --mode            direction (default): each bone points where the BVH bone points; relative:\n"
     "                    each joint's rotation relative to --reference-frame (default 0)\n"
     "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n";
@@ -438,6 +440,11 @@ int runAnimate(const Options& o) {
   }
   const FrameRange range = parseFrames(o.get("frames"), motion.frameCount);
   const bool volumes = o.has("volumes");
+  std::string imageExt;
+  if (o.has("image")) {
+    pipeline.setRestImage(repose::readIntensityImage(o.get("image")), o.get("image"));
+    imageExt = repose::imageExtension(o.get("image"));
+  }
 
   repose::AtomicOutputs out(outDir);
   repose::makeDirectories(out.stage("frames"));
@@ -458,6 +465,7 @@ int runAnimate(const Options& o) {
     vtkUnstructuredGrid* mesh = pipeline.posedMesh();
     vtkPolyData* surfaces = pipeline.posedSurfaces();
     vtkImageData* labels = volumes ? pipeline.posedLabels() : nullptr;
+    vtkImageData* image = pipeline.posedImage();
     const double posing = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     totalPosing += posing;
     worstPosing = std::max(worstPosing, posing);
@@ -477,6 +485,10 @@ int runAnimate(const Options& o) {
         auto it = counts.find(label);
         csv << "," << double(it == counts.end() ? 0 : it->second) / double(count);
       }
+    }
+    if (image) {
+      std::snprintf(name, sizeof(name), "frames/image_%05d", f);
+      repose::writeImage(image, out.stage(name + imageExt));
     }
     csv << "\n";
     ++written;
@@ -594,7 +606,7 @@ int main(int argc, char** argv) {
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm"},
+                                 "unit-mm", "image"},
                                 {"volumes", "no-root-motion"}));
     throw UsageError("unknown command '" + command + "' (see repose --help)");
   } catch (const UsageError& e) {

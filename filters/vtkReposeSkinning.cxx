@@ -30,21 +30,29 @@ struct vtkReposeSkinning::Internals
 {
   vtkUnstructuredGrid* CachedInput = nullptr;  // identity only, never dereferenced
   vtkMTimeType CachedInputTime = 0;
-  repose::Points Rest;
-  repose::SparseWeights Weights;
-  std::vector<int> FixedBone;
-  repose::Points Posed;  // reused: a new pose does not reallocate it
+  repose::SkinningCache Cache;  // float rest positions and sorted weights
+  // Output points, reused while the node count is unchanged (no allocation or page faults per pose).
+  vtkSmartPointer<vtkPoints> Posed;
 
   void Convert(vtkUnstructuredGrid* input)
   {
     const vtkIdType np = input->GetNumberOfPoints();
-    this->Rest.resize(np, 3);
+    repose::Points rest(np, 3);
     for (vtkIdType i = 0; i < np; ++i)
     {
       double p[3];
       input->GetPoint(i, p);
-      this->Rest.row(i) << p[0], p[1], p[2];
+      rest.row(i) << p[0], p[1], p[2];
     }
+    repose::SparseWeights weights;
+    std::vector<int> fixedBone;
+    this->ConvertWeights(input, np, weights, fixedBone);
+    this->Cache = repose::makeSkinningCache(rest, weights, fixedBone);
+  }
+
+  static void ConvertWeights(vtkUnstructuredGrid* input, vtkIdType np, repose::SparseWeights& Weights,
+    std::vector<int>& FixedBone)
+  {
     vtkPointData* pd = input->GetPointData();
     vtkDataArray* w = pd->GetArray("Weights");
     vtkDataArray* b = pd->GetArray("BoneIds");
@@ -55,17 +63,17 @@ struct vtkReposeSkinning::Internals
     if (b->GetNumberOfComponents() != k || w->GetNumberOfTuples() != np ||
       b->GetNumberOfTuples() != np)
       throw std::invalid_argument("point data \"Weights\" and \"BoneIds\" disagree in size");
-    this->Weights.k = k;
-    this->Weights.weight.resize(std::size_t(np) * k);
-    this->Weights.bone.resize(std::size_t(np) * k);
+    Weights.k = k;
+    Weights.weight.resize(std::size_t(np) * k);
+    Weights.bone.resize(std::size_t(np) * k);
     // Fast path for vtkReposeBoneWeights' own array types.
     auto* wf = vtkFloatArray::FastDownCast(w);
     auto* bu = vtkUnsignedShortArray::FastDownCast(b);
     if (wf && bu)
     {
       const std::size_t n = std::size_t(np) * k;
-      std::copy(wf->GetPointer(0), wf->GetPointer(0) + n, this->Weights.weight.begin());
-      std::copy(bu->GetPointer(0), bu->GetPointer(0) + n, this->Weights.bone.begin());
+      std::copy(wf->GetPointer(0), wf->GetPointer(0) + n, Weights.weight.begin());
+      std::copy(bu->GetPointer(0), bu->GetPointer(0) + n, Weights.bone.begin());
     }
     else
     {
@@ -74,23 +82,23 @@ struct vtkReposeSkinning::Internals
         for (int c = 0; c < k; ++c)
         {
           const std::size_t s = std::size_t(i) * k + c;
-          this->Weights.weight[s] = static_cast<float>(w->GetComponent(i, c));
+          Weights.weight[s] = static_cast<float>(w->GetComponent(i, c));
           const double bone = b->GetComponent(i, c);
           if (bone < 0 || bone > 65535 || bone != std::floor(bone))
             throw std::invalid_argument("BoneIds of node " + std::to_string(i) + " holds " +
               std::to_string(bone) + ", not a bone index");
-          this->Weights.bone[s] = static_cast<std::uint16_t>(bone);
+          Weights.bone[s] = static_cast<std::uint16_t>(bone);
         }
       }
     }
-    this->FixedBone.clear();
+    FixedBone.clear();
     if (vtkDataArray* f = pd->GetArray("FixedBone"))
     {
       if (f->GetNumberOfComponents() != 1 || f->GetNumberOfTuples() != np)
         throw std::invalid_argument("point data \"FixedBone\" must have 1 component per node");
-      this->FixedBone.resize(np);
+      FixedBone.resize(np);
       for (vtkIdType i = 0; i < np; ++i)
-        this->FixedBone[i] = static_cast<int>(f->GetComponent(i, 0));
+        FixedBone[i] = static_cast<int>(f->GetComponent(i, 0));
     }
   }
 };
@@ -152,38 +160,26 @@ int vtkReposeSkinning::RequestData(
       in.CachedInputTime = input->GetMTime();
     }
 
+    const vtkIdType np = static_cast<vtkIdType>(in.Cache.nodeCount());
+    if (!in.Posed || in.Posed->GetNumberOfPoints() != np)
+    {
+      in.Posed = vtkSmartPointer<vtkPoints>::New();
+      in.Posed->SetDataTypeToFloat();
+      in.Posed->SetNumberOfPoints(np);
+    }
+    float* dst = vtkArrayDownCast<vtkFloatArray>(in.Posed->GetData())->GetPointer(0);
     const auto t0 = Clock::now();
-    repose::skinNodes(in.Rest, in.Weights, in.FixedBone, bones,
+    repose::skinNodes(in.Cache, bones,
       this->SkinningMethod == LinearBlend ? repose::SkinningMethod::LinearBlend
                                           : repose::SkinningMethod::DualQuaternion,
-      in.Posed);
+      dst);
     this->LastSkinningTime = std::chrono::duration<double>(Clock::now() - t0).count();
-
-    // New points every run (a downstream shallow copy of an earlier pose must not change), of the
-    // input's precision so the rest pose reproduces the input points exactly.
-    const vtkIdType np = in.Posed.rows();
-    vtkNew<vtkPoints> points;
-    const double* src = in.Posed.data();
-    if (input->GetPoints() && input->GetPoints()->GetDataType() == VTK_DOUBLE)
-    {
-      points->SetDataTypeToDouble();
-      points->SetNumberOfPoints(np);
-      double* dst = static_cast<vtkDoubleArray*>(points->GetData())->GetPointer(0);
-      std::copy(src, src + 3 * np, dst);
-    }
-    else
-    {
-      points->SetDataTypeToFloat();
-      points->SetNumberOfPoints(np);
-      float* dst = static_cast<vtkFloatArray*>(points->GetData())->GetPointer(0);
-      vtkSMPTools::For(0, 3 * np, 65536, [dst, src](vtkIdType b, vtkIdType e) {
-        for (vtkIdType i = b; i < e; ++i)
-          dst[i] = static_cast<float>(src[i]);
-      });
-    }
+    // Same points object, new contents: mark it (and its array) modified for renderers/bounds.
+    in.Posed->GetData()->Modified();
+    in.Posed->Modified();
 
     output->ShallowCopy(input);
-    output->SetPoints(points);
+    output->SetPoints(in.Posed);
   }
   catch (const std::exception& e)
   {

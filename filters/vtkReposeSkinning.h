@@ -3,9 +3,11 @@
 // Poses a weighted tet mesh: forward kinematics of SkeletonJSON + PoseJSON, then dual-quaternion
 // (default) or linear-blend skinning of every node. Input: the output of vtkReposeBoneWeights
 // (point data "Weights", "BoneIds", optional "FixedBone": fixed nodes move rigidly with their bone).
-// Output: same topology and data, posed points (double if the input points are double, else float).
-// The rest points and weights are converted once per input change; a new pose (or method) only
-// re-runs the skinning itself.
+// Output: same topology and data, posed float points (~1e-4 mm rounding at 1 m coordinates).
+// The rest points and weights are converted once per input change (to a compact float cache); a new
+// pose (or method) only re-runs the skinning itself, in place: the output vtkPoints object is reused
+// (and marked Modified) while the node count is unchanged, so a consumer holding on to an earlier
+// output's points sees them change; deep-copy the output to keep a pose.
 
 #include "ReposeFiltersModule.h"
 #include "vtkUnstructuredGridAlgorithm.h"

@@ -2,6 +2,7 @@
 
 #include "vtkCellData.h"
 #include "vtkCellType.h"
+#include "vtkAOSDataArrayTemplate.h"
 #include "vtkDataArray.h"
 #include "vtkFloatArray.h"
 #include "vtkInformation.h"
@@ -11,6 +12,7 @@
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
 #include "vtkUnstructuredGrid.h"
 
 #include "barycentric_binding.h"
@@ -18,6 +20,7 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 vtkStandardNewMacro(vtkReposeSurfaceDeformer);
 
@@ -25,14 +28,14 @@ vtkStandardNewMacro(vtkReposeSurfaceDeformer);
 // posed node positions.
 struct vtkReposeSurfaceDeformer::Internals
 {
-  repose::Binding Local;   // tet[p] == p
-  repose::Tets LocalTets;  // #P by 4 node ids of the bound tet
+  repose::NodeBinding Bound;  // 4 node ids + 4 float weights per vertex
   vtkMTimeType SurfaceTime = 0;
   vtkPolyData* Surface = nullptr;
   vtkMTimeType CellsTime = 0;
   vtkUnstructuredGrid* Mesh = nullptr;
-  repose::Points Nodes;
-  repose::Points Moved;
+  std::vector<float> Nodes;  // only for posed points that are neither float nor double AOS
+  // Output points, reused while the vertex count is unchanged (no allocation per pose).
+  vtkSmartPointer<vtkPoints> Moved;
 };
 
 vtkReposeSurfaceDeformer::vtkReposeSurfaceDeformer()
@@ -79,10 +82,12 @@ int vtkReposeSurfaceDeformer::RequestData(
     if (in.Surface != surface || in.SurfaceTime != surface->GetMTime() || in.Mesh != mesh ||
       in.CellsTime != cellsTime)
     {
+      in.Surface = nullptr;
       const vtkIdType nCells = mesh->GetNumberOfCells();
-      in.Local.tet.resize(static_cast<std::size_t>(n));
-      in.Local.bary.resize(n, 4);
-      in.LocalTets.resize(n, 4);
+      repose::Binding local;  // tet[p] == p: each vertex gets its own "tet" of node ids
+      repose::Tets localTets(n, 4);
+      local.tet.resize(static_cast<std::size_t>(n));
+      local.bary.resize(n, 4);
       vtkIdType npts;
       const vtkIdType* pts;
       for (vtkIdType p = 0; p < n; ++p)
@@ -96,11 +101,12 @@ int vtkReposeSurfaceDeformer::RequestData(
         mesh->GetCellPoints(t, npts, pts);
         for (int a = 0; a < 4; ++a)
         {
-          in.LocalTets(p, a) = static_cast<int>(pts[a]);
-          in.Local.bary(p, a) = weights->GetTypedComponent(p, a);
+          localTets(p, a) = static_cast<int>(pts[a]);
+          local.bary(p, a) = weights->GetTypedComponent(p, a);
         }
-        in.Local.tet[static_cast<std::size_t>(p)] = static_cast<int>(p);
+        local.tet[static_cast<std::size_t>(p)] = static_cast<int>(p);
       }
+      in.Bound = repose::makeNodeBinding(local, localTets);
       in.Surface = surface;
       in.SurfaceTime = surface->GetMTime();
       in.Mesh = mesh;
@@ -108,24 +114,40 @@ int vtkReposeSurfaceDeformer::RequestData(
     }
     vtkPoints* nodes = mesh->GetPoints();
     const vtkIdType nv = nodes ? nodes->GetNumberOfPoints() : 0;
-    in.Nodes.resize(nv, 3);
-    for (vtkIdType v = 0; v < nv; ++v)
+    if (!in.Moved || in.Moved->GetNumberOfPoints() != n)
     {
-      double x[3];
-      nodes->GetPoint(v, x);
-      in.Nodes.row(v) << x[0], x[1], x[2];
+      in.Moved = vtkSmartPointer<vtkPoints>::New();
+      in.Moved->SetDataTypeToFloat();
+      in.Moved->SetNumberOfPoints(n);
     }
-    repose::applyBinding(in.Local, in.LocalTets, in.Nodes, in.Moved);
-    auto moved = vtkSmartPointer<vtkPoints>::New();
-    moved->SetDataTypeToFloat();
-    moved->SetNumberOfPoints(n);
-    float* dst = static_cast<vtkFloatArray*>(moved->GetData())->GetPointer(0);
-    for (vtkIdType i = 0; i < 3 * n; ++i)
+    float* dst = vtkArrayDownCast<vtkFloatArray>(in.Moved->GetData())->GetPointer(0);
+    vtkDataArray* data = nodes ? nodes->GetData() : nullptr;
+    // Read the posed nodes in place (vtkReposeSkinning writes float).
+    if (auto* f = vtkArrayDownCast<vtkAOSDataArrayTemplate<float>>(data))
     {
-      dst[i] = static_cast<float>(in.Moved.data()[i]);
+      repose::applyBinding(in.Bound, f->GetPointer(0), static_cast<std::size_t>(nv), dst);
     }
+    else if (auto* d = vtkArrayDownCast<vtkAOSDataArrayTemplate<double>>(data))
+    {
+      repose::applyBinding(in.Bound, d->GetPointer(0), static_cast<std::size_t>(nv), dst);
+    }
+    else
+    {
+      in.Nodes.resize(3 * static_cast<std::size_t>(nv));
+      for (vtkIdType v = 0; v < nv; ++v)
+      {
+        double x[3];
+        nodes->GetPoint(v, x);
+        for (int c = 0; c < 3; ++c)
+          in.Nodes[3 * v + c] = static_cast<float>(x[c]);
+      }
+      repose::applyBinding(in.Bound, in.Nodes.data(), static_cast<std::size_t>(nv), dst);
+    }
+    // Same points object, new contents: mark it (and its array) modified for renderers/bounds.
+    in.Moved->GetData()->Modified();
+    in.Moved->Modified();
     output->ShallowCopy(surface);
-    output->SetPoints(moved);
+    output->SetPoints(in.Moved);
     // Normals of the rest surface are wrong after deformation; renderers recompute them if needed.
     output->GetPointData()->SetNormals(nullptr);
     output->GetCellData()->SetNormals(nullptr);

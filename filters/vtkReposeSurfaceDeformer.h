@@ -3,7 +3,9 @@
 // Moves bound surfaces with the posed tet mesh: input 0 = surface with "BoundTet"/"BoundWeights"
 // (from vtkReposeSurfaceBinding), input 1 = posed tet mesh (same topology as the rest mesh used for
 // binding). Output: the surface with moved points; normals are dropped (stale after deformation).
-// The binding is cached and rebuilt only when input 0 changes, so a new pose costs one pass.
+// The binding is cached and rebuilt only when input 0 changes, so a new pose costs one pass. Output
+// points are float and the vtkPoints object is reused (marked Modified) while the vertex count is
+// unchanged: a consumer holding an earlier output's points sees them change (deep-copy to keep).
 
 #include "ReposeFiltersModule.h"
 #include "vtkPolyDataAlgorithm.h"

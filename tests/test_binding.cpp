@@ -185,3 +185,47 @@ TEST(Binding, BadInputThrows) {
   Points Q;
   EXPECT_THROW(repose::applyBinding(b, T, V, Q), std::invalid_argument);
 }
+
+// The float node-id path (what the surface deformer runs per pose) matches the double path.
+TEST(Binding, NodeBindingMatchesApplyBinding) {
+  Points V;
+  Tets T;
+  jitteredMesh(V, T);
+  const Points P = randomPoints(3000, {-2.5, -1.5, -0.5}, {3.5, 2.5, 4.5}, 5);  // some outside
+  const repose::Binding b = repose::bindPoints(V, T, P);
+  EXPECT_GT(b.outsideCount, 0u);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 1, -2).normalized()).toRotationMatrix();
+  Points Vm = (V * R.transpose()).rowwise() + Eigen::RowVector3d(100, -50, 20);
+  for (Eigen::Index v = 0; v < Vm.rows(); v += 3) Vm.row(v) *= 1.01;  // non-affine too
+  Points Q;
+  repose::applyBinding(b, T, Vm, Q);
+  const repose::NodeBinding nb = repose::makeNodeBinding(b, T);
+  ASSERT_EQ(nb.pointCount(), 3000u);
+  std::vector<float> fromDouble(3 * 3000), fromFloat(3 * 3000);
+  repose::applyBinding(nb, Vm.data(), std::size_t(Vm.rows()), fromDouble.data());
+  const std::vector<float> Vf(Vm.data(), Vm.data() + Vm.size());
+  repose::applyBinding(nb, Vf.data(), std::size_t(Vm.rows()), fromFloat.data());
+  double errD = 0, errF = 0;
+  for (int p = 0; p < 3000; ++p)
+    for (int c = 0; c < 3; ++c) {
+      errD = std::max(errD, std::abs(fromDouble[3 * p + c] - Q(p, c)));
+      errF = std::max(errF, std::abs(fromFloat[3 * p + c] - Q(p, c)));
+    }
+  EXPECT_LT(errD, 2e-5);  // float rounding at |x| ~ 100
+  EXPECT_LT(errF, 5e-5);
+}
+
+TEST(Binding, NodeBindingBadInputThrows) {
+  Points V;
+  Tets T;
+  boxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1), {2, 2, 2}, V, T);
+  const Points P = randomPoints(10, {0, 0, 0}, {1, 1, 1}, 6);
+  repose::Binding b = repose::bindPoints(V, T, P);
+  const repose::NodeBinding nb = repose::makeNodeBinding(b, T);
+  std::vector<float> out(30);
+  // Posed mesh with fewer nodes than the binding uses.
+  EXPECT_THROW(repose::applyBinding(nb, V.data(), std::size_t(nb.maxNode), out.data()), std::invalid_argument);
+  EXPECT_NO_THROW(repose::applyBinding(nb, V.data(), std::size_t(V.rows()), out.data()));
+  b.tet[3] = int(T.rows());
+  EXPECT_THROW(repose::makeNodeBinding(b, T), std::invalid_argument);
+}

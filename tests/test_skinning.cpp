@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <random>
 #include <stdexcept>
@@ -251,5 +252,106 @@ TEST(Skinning, Throughput500kNodes) {
                 method == repose::SkinningMethod::DualQuaternion ? "DQS" : "LBS", n, k, nb, ms, cpuMs);
     EXPECT_LT(ms, 500.0);
     EXPECT_TRUE(posed.allFinite());
+  }
+}
+
+namespace {
+
+// Random k-sparse weights over nb bones in random slot order, a few fixed and a few weightless nodes.
+void randomRig(int n, int k, int nb, unsigned seed, repose::SparseWeights& w, std::vector<int>& fixed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> boneDist(0, nb - 1);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  w = repose::SparseWeights{};
+  w.k = k;
+  fixed.assign(n, -1);
+  for (int i = 0; i < n; ++i) {
+    std::vector<float> ws(k);
+    float s = 0;
+    for (int j = 0; j < k; ++j) s += ws[j] = (j == 2 ? 0.0f : u(rng));  // slot 2 unused
+    for (int j = 0; j < k; ++j) {
+      w.weight.push_back(i % 97 == 5 ? 0.0f : ws[j] / s);
+      w.bone.push_back(std::uint16_t(boneDist(rng)));
+    }
+    if (i % 13 == 0) fixed[i] = boneDist(rng);
+  }
+}
+
+}  // namespace
+
+// The float cache path (what vtkReposeSkinning runs) agrees with the double path up to float
+// rounding, for both methods, k = 2..6, fixed and weightless nodes, and antipodal bone quaternions.
+TEST(Skinning, FloatCachePathMatchesDoublePath) {
+  const int n = 40003, nb = 12;  // several threading chunks and a partial SIMD block
+  repose::Points rest = randomPoints(n, 7);
+  rest.rowwise() += Eigen::RowVector3d(800, -300, 1000);  // patient coordinates far from the origin
+  std::vector<Eigen::Isometry3d> bones;
+  for (int b = 0; b < nb; ++b)  // rotations up to ~330 degrees: many antipodal pairs
+    bones.push_back(rigid(-170.0 + 29.0 * b, {1.0, 0.3 * b, -2.0}, {5.0 * b, -3.0, 2.0 * b}));
+  for (int k : {2, 3, 4, 6}) {
+    repose::SparseWeights w;
+    std::vector<int> fixed;
+    randomRig(n, k, nb, 100 + k, w, fixed);
+    const repose::SkinningCache cache = repose::makeSkinningCache(rest, w, fixed);
+    ASSERT_EQ(cache.nodeCount(), std::size_t(n));
+    for (auto method : {repose::SkinningMethod::DualQuaternion, repose::SkinningMethod::LinearBlend}) {
+      repose::Points expected;
+      repose::skinNodes(rest, w, fixed, bones, method, expected);
+      for (bool simd : {true, false}) {  // the SIMD kernels (if the CPU has them) and the portable ones
+        if (!simd) setenv("REPOSE_NO_SIMD", "1", 1);
+        std::vector<float> posed(3 * n, -1.0f);
+        repose::skinNodes(cache, bones, method, posed.data());
+        unsetenv("REPOSE_NO_SIMD");
+        double err = 0;
+        for (int i = 0; i < n; ++i)
+          for (int c = 0; c < 3; ++c) err = std::max(err, std::abs(posed[3 * i + c] - expected(i, c)));
+        // |x| ~ 1300 mm: float spacing 1.2e-4 mm, a few roundings.
+        EXPECT_LT(err, 2e-3) << "k=" << k << (method == repose::SkinningMethod::LinearBlend ? " LBS" : " DQS")
+                             << (simd ? "" : " portable");
+        for (int i = 5; i < n; i += 97)
+          if (fixed[i] < 0)  // weightless: stays at rest
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(posed[3 * i + c], float(rest(i, c)));
+      }
+    }
+  }
+}
+
+TEST(Skinning, FloatCachePathBadInputThrows) {
+  const repose::Points rest = randomPoints(10, 8);
+  repose::SparseWeights w = oneBoneWeights(10, 4, 2);
+  const repose::SkinningCache cache = repose::makeSkinningCache(rest, w, {});
+  EXPECT_EQ(cache.maxBone, 2);
+  std::vector<float> posed(30);
+  const std::vector<Eigen::Isometry3d> two(2, Eigen::Isometry3d::Identity()), three(3, Eigen::Isometry3d::Identity());
+  EXPECT_THROW(repose::skinNodes(cache, two, repose::SkinningMethod::DualQuaternion, posed.data()),
+               std::invalid_argument);
+  EXPECT_NO_THROW(repose::skinNodes(cache, three, repose::SkinningMethod::DualQuaternion, posed.data()));
+  EXPECT_THROW(repose::makeSkinningCache(randomPoints(9, 8), w, {}), std::invalid_argument);
+  EXPECT_THROW(repose::makeSkinningCache(rest, w, std::vector<int>(4, -1)), std::invalid_argument);
+}
+
+TEST(Skinning, FloatCacheThroughput500kNodes) {
+  const int n = 500000, k = 4, nb = 20;
+  const repose::Points rest = randomPoints(n, 9);
+  repose::SparseWeights w;
+  std::vector<int> fixed;
+  randomRig(n, k, nb, 10, w, fixed);
+  std::vector<Eigen::Isometry3d> bones;
+  for (int b = 0; b < nb; ++b) bones.push_back(rigid(9.0 * b, {1.0, double(b), 2.0}, {double(b), 0.0, -double(b)}));
+  const repose::SkinningCache cache = repose::makeSkinningCache(rest, w, fixed);
+  std::vector<float> posed(3 * std::size_t(n));
+  for (auto method : {repose::SkinningMethod::DualQuaternion, repose::SkinningMethod::LinearBlend}) {
+    repose::skinNodes(cache, bones, method, posed.data());  // warm-up
+    const int reps = 10;
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::clock_t c0 = std::clock();
+    for (int r = 0; r < reps; ++r) repose::skinNodes(cache, bones, method, posed.data());
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / reps;
+    const double cpuMs = 1000.0 * double(std::clock() - c0) / CLOCKS_PER_SEC / reps;
+    std::printf("[ timing   ] float %s skinning of %d nodes (k=%d, %d bones): %.2f ms wall, %.2f ms CPU\n",
+                method == repose::SkinningMethod::DualQuaternion ? "DQS" : "LBS", n, k, nb, ms, cpuMs);
+    EXPECT_LT(ms, 500.0);
+    for (float v : posed) ASSERT_TRUE(std::isfinite(v));
   }
 }

@@ -1,5 +1,6 @@
 #include "barycentric_binding.h"
 
+#include <algorithm>
 #include <atomic>
 #include <stdexcept>
 #include <string>
@@ -66,6 +67,82 @@ void applyBinding(const Binding& binding, const Tets& tets, const Points& posedN
                                 std::to_string(nT) + "-tet mesh with " + std::to_string(nV) +
                                 " posed nodes (binding made for another mesh?)");
   }
+}
+
+NodeBinding makeNodeBinding(const Binding& binding, const Tets& tets) {
+  const std::size_t n = binding.tet.size();
+  if (std::size_t(binding.bary.rows()) != n)
+    throw std::invalid_argument("node binding: " + std::to_string(n) + " tets but " +
+                                std::to_string(binding.bary.rows()) + " barycentric rows");
+  NodeBinding nb;
+  nb.node.resize(4 * n);
+  nb.bary.resize(4 * n);
+  for (std::size_t p = 0; p < n; ++p) {
+    const int t = binding.tet[p];
+    if (t < 0 || t >= tets.rows())
+      throw std::invalid_argument("node binding: point " + std::to_string(p) + " is bound to tet " +
+                                  std::to_string(t) + ", not a tet of the " + std::to_string(tets.rows()) +
+                                  "-tet mesh (binding made for another mesh?)");
+    for (int a = 0; a < 4; ++a) {
+      const int v = tets(t, a);
+      if (v < 0)
+        throw std::invalid_argument("node binding: tet " + std::to_string(t) + " has a negative node id");
+      nb.node[4 * p + a] = v;
+      nb.bary[4 * p + a] = binding.bary(Eigen::Index(p), a);
+      nb.maxNode = std::max(nb.maxNode, v);
+    }
+  }
+  return nb;
+}
+
+namespace {
+
+template <typename T>
+void applyNodeBinding(const NodeBinding& b, const T* nodes, std::size_t nodeCount, float* out) {
+  const std::size_t n = b.pointCount();
+  if (b.node.size() != 4 * n || b.bary.size() != 4 * n)
+    throw std::invalid_argument("apply binding: inconsistent NodeBinding (build it with makeNodeBinding)");
+  if (n == 0) return;
+  if (!nodes || !out) throw std::invalid_argument("apply binding: null node or output buffer");
+  if (b.maxNode >= 0 && std::size_t(b.maxNode) >= nodeCount)
+    throw std::invalid_argument("apply binding: the binding uses node " + std::to_string(b.maxNode) +
+                                " but the posed mesh has " + std::to_string(nodeCount) +
+                                " nodes (binding made for another mesh?)");
+  const int* ids = b.node.data();
+  const float* w = b.bary.data();
+  // Latency bound: the 4 node gathers of a vertex miss the cache when the node array is larger
+  // than the cache, so the nodes of vertex p + kAhead are prefetched (their ids are known).
+  constexpr std::size_t kAhead = 64;
+  parallelFor(n, [=](std::size_t begin, std::size_t end) {
+    for (std::size_t p = begin; p < end; ++p) {
+#if defined(__GNUC__)
+      if (p + kAhead < end) {
+        const int* ahead = ids + 4 * (p + kAhead);
+        for (int a = 0; a < 4; ++a) __builtin_prefetch(nodes + 3 * std::size_t(ahead[a]));
+      }
+#endif
+      const int* id = ids + 4 * p;
+      const float* wp = w + 4 * p;
+      const T* a = nodes + 3 * std::size_t(id[0]);
+      const T* c = nodes + 3 * std::size_t(id[1]);
+      const T* d = nodes + 3 * std::size_t(id[2]);
+      const T* e = nodes + 3 * std::size_t(id[3]);
+      for (int k = 0; k < 3; ++k)
+        out[3 * p + k] = float(wp[0] * a[k] + wp[1] * c[k] + wp[2] * d[k] + wp[3] * e[k]);
+    }
+  }, 8192);
+}
+
+}  // namespace
+
+void applyBinding(const NodeBinding& binding, const float* posedNodes, std::size_t nodeCount,
+                  float* posedPoints) {
+  applyNodeBinding(binding, posedNodes, nodeCount, posedPoints);
+}
+
+void applyBinding(const NodeBinding& binding, const double* posedNodes, std::size_t nodeCount,
+                  float* posedPoints) {
+  applyNodeBinding(binding, posedNodes, nodeCount, posedPoints);
 }
 
 }  // namespace repose

@@ -1,6 +1,7 @@
 #pragma once
 // Binding of arbitrary points (surface vertices) to the rest tet mesh, and moving them with it.
 #include <Eigen/Core>
+#include <cstddef>
 #include <vector>
 
 #include "tet_mesh.h"
@@ -21,5 +22,24 @@ Binding bindPoints(const Points& restNodes, const Tets& tets, const Points& poin
 
 /// posedPoints(p) = Σ_a bary(p,a) * posedNodes(tets(tet(p), a)). Threaded. posedPoints is resized.
 void applyBinding(const Binding& binding, const Tets& tets, const Points& posedNodes, Points& posedPoints);
+
+/// A binding resolved to node ids, for moving points every pose without touching the tets.
+struct NodeBinding {
+  std::vector<int> node;    ///< #P*4 node ids of each point's tet
+  std::vector<float> bary;  ///< #P*4 barycentric weights
+  int maxNode = -1;         ///< largest node id (checked against the posed node count per pose)
+  std::size_t pointCount() const { return node.size() / 4; }
+};
+
+/// Resolves binding.tet through tets. Throws std::invalid_argument on an invalid tet or node id.
+NodeBinding makeNodeBinding(const Binding& binding, const Tets& tets);
+
+/// Float fast path of applyBinding: posedPoints (#P*3 floats, caller-allocated) from posedNodes
+/// (nodeCount*3 floats or doubles, x y z per node). Threaded. Throws std::invalid_argument when the
+/// binding uses a node >= nodeCount.
+void applyBinding(const NodeBinding& binding, const float* posedNodes, std::size_t nodeCount,
+                  float* posedPoints);
+void applyBinding(const NodeBinding& binding, const double* posedNodes, std::size_t nodeCount,
+                  float* posedPoints);
 
 }  // namespace repose
