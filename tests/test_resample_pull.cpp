@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "resample_pull.h"
+#include "tet_boundary.h"
 #include "tet_mesh.h"
 
 namespace {
@@ -62,6 +63,15 @@ void gridMesh(const ImageGrid& g, Points& V, Tets& T, int cellsPerAxis = 8) {
           {cellsPerAxis, cellsPerAxis + 1, cellsPerAxis - 1}, V, T);
   for (Eigen::Index v = 0; v < V.rows(); ++v) V.row(v) = g.indexToPhysical(V.row(v).transpose()).transpose();
   // A left-handed direction flips orientation: keep tets positive in physical space.
+  if (g.direction.determinant() < 0) T.col(2).swap(T.col(3));
+}
+
+// Mesh whose nodes span voxel centres 1..dims-2: the grid minus its outer voxel layer, like the peeled
+// body mask the real meshes are built from.
+void peeledMesh(const ImageGrid& g, Points& V, Tets& T, int cellsPerAxis = 5) {
+  boxMesh(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(g.dims[0] - 2, g.dims[1] - 2, g.dims[2] - 2),
+          {cellsPerAxis, cellsPerAxis + 1, cellsPerAxis - 1}, V, T);
+  for (Eigen::Index v = 0; v < V.rows(); ++v) V.row(v) = g.indexToPhysical(V.row(v).transpose()).transpose();
   if (g.direction.determinant() < 0) T.col(2).swap(T.col(3));
 }
 
@@ -248,4 +258,203 @@ TEST(ResamplePull, BadInputThrows) {
   EXPECT_THROW(repose::resampleLabelsPull(L, V, V, bad, g), std::invalid_argument);
   L.data.pop_back();
   EXPECT_THROW(repose::resampleLabelsPull(L, V, V, T, g), std::invalid_argument);
+}
+
+TEST(TetBoundary, BoxFacesAreExactlyTheSurfaceTriangles) {
+  Points V;
+  Tets T;
+  const std::array<int, 3> n{3, 4, 5};
+  boxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, 4, 5), n, V, T);
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  ASSERT_EQ(B.boundaryFaceMask.size(), std::size_t(T.rows()));
+  // Each unit square of the surface is split into two triangles.
+  EXPECT_EQ(B.boundaryFaces, std::size_t(4 * (n[0] * n[1] + n[1] * n[2] + n[0] * n[2])));
+  std::size_t onSurface = 0, tetsWithFace = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    tetsWithFace += B.boundaryFaceMask[t] != 0;
+    for (int a = 0; a < 4; ++a) {
+      // A face lies on the surface iff its three nodes share a coordinate at the box's min or max.
+      bool surface = false;
+      for (int c = 0; c < 3; ++c)
+        for (double plane : {0.0, double(n[c])}) {
+          bool all = true;
+          for (int b = 0; b < 4; ++b)
+            if (b != a) all = all && V(T(t, b), c) == plane;
+          surface = surface || all;
+        }
+      onSurface += surface;
+      EXPECT_EQ(bool((B.boundaryFaceMask[t] >> a) & 1), surface) << "tet " << t << " face " << a;
+    }
+  }
+  EXPECT_EQ(onSurface, B.boundaryFaces);
+  EXPECT_EQ(B.boundaryTets, tetsWithFace);
+  Tets bad = T;
+  bad(0, 0) = -1;
+  EXPECT_THROW(repose::tetBoundary(bad), std::invalid_argument);
+}
+
+TEST(ResamplePull, ExtrapolationRestoresPeeledOuterLayerAtIdentity) {
+  const ImageGrid g = testGrid();
+  const repose::LabelVolume L = blockLabels(g);
+  repose::IntensityVolume F;
+  F.grid = g;
+  F.data.resize(g.voxelCount());
+  for (std::size_t v = 0; v < F.data.size(); ++v) F.data[v] = float(std::sin(0.37 * double(v)) * 100.0);
+  Points V;
+  Tets T;
+  peeledMesh(g, V, T);
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  repose::PullResampleReport rep;
+  // Without extrapolation only the inner (dims - 2)^3 block is covered: the outer layer is lost.
+  const repose::LabelVolume plain = repose::resampleLabelsPull(L, V, V, T, g, -1, &rep);
+  const std::size_t inner = std::size_t(g.dims[0] - 2) * (g.dims[1] - 2) * (g.dims[2] - 2);
+  EXPECT_EQ(rep.coveredVoxels, inner);
+  EXPECT_EQ(rep.extrapolatedVoxels, 0u);
+  EXPECT_EQ(plain.at(0, 5, 5), -1);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;
+  const repose::LabelVolume O = repose::resampleLabelsPull(L, V, V, T, g, opt, -1, &rep);
+  EXPECT_EQ(rep.coveredVoxels, inner);
+  EXPECT_EQ(rep.extrapolatedVoxels, g.voxelCount() - inner);
+  EXPECT_EQ(O.data, L.data);
+  // The rest coverage is the inner block; sampling only outside it still restores the layer.
+  const repose::MaskVolume C = repose::restMeshCoverage(g, V, T);
+  std::size_t coveredAtRest = 0;
+  for (const auto c : C.data) coveredAtRest += c;
+  EXPECT_EQ(coveredAtRest, inner);
+  opt.restCoverage = &C;
+  EXPECT_EQ(repose::resampleLabelsPull(L, V, V, T, g, opt, -1, &rep).data, L.data);
+  const repose::IntensityVolume G = repose::resampleIntensityPull(F, V, V, T, g, opt, -1000.f, &rep);
+  EXPECT_EQ(rep.extrapolatedVoxels, g.voxelCount() - inner);
+  for (std::size_t v = 0; v < F.data.size(); ++v) ASSERT_NEAR(G.data[v], F.data[v], 1e-3) << v;
+  // Distance 0 turns the extension off.
+  opt.extrapolationDistance = 0;
+  const repose::LabelVolume off = repose::resampleLabelsPull(L, V, V, T, g, opt, -1, &rep);
+  EXPECT_EQ(rep.extrapolatedVoxels, 0u);
+  EXPECT_EQ(off.data, plain.data);
+  // A boundary of another mesh is rejected.
+  const repose::TetBoundary other = repose::tetBoundary(T.topRows(T.rows() - 1));
+  opt.boundary = &other;
+  EXPECT_THROW(repose::resampleLabelsPull(L, V, V, T, g, opt), std::invalid_argument);
+}
+
+TEST(ResamplePull, ExtrapolationMatchesRigidOracleIncludingOuterLayer) {
+  const ImageGrid g = testGrid();
+  const repose::LabelVolume L = blockLabels(g);
+  Points V;
+  Tets T;
+  peeledMesh(g, V, T);
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  const Rigid m = testMotion();
+  const Points P = moved(V, m);
+  const ImageGrid out = repose::posedOutputGrid(g, P, 4);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;
+  repose::PullResampleReport rep;
+  const repose::LabelVolume O = repose::resampleLabelsPull(L, V, P, T, out, opt, -7, &rep);
+  std::size_t mismatches = 0, inside = 0, nearBoundary = 0, outerLayer = 0;
+  for (int k = 0; k < out.dims[2]; ++k)
+    for (int j = 0; j < out.dims[1]; ++j)
+      for (int i = 0; i < out.dims[0]; ++i) {
+        const Eigen::Vector3d x = m.R.transpose() * (out.indexToPhysical(Eigen::Vector3d(i, j, k)) - m.t);
+        const Eigen::Vector3d r = g.physicalToIndex(x);
+        double margin = 1e300, inner = 1e300;
+        for (int a = 0; a < 3; ++a) {
+          margin = std::min({margin, r[a] + 0.5, g.dims[a] - 0.5 - r[a]});
+          inner = std::min({inner, r[a] - 1.0, g.dims[a] - 2.0 - r[a]});
+        }
+        if (std::abs(margin) < 1e-6) ++nearBoundary;
+        const bool in = margin > 0;
+        inside += in;
+        outerLayer += in && inner < 0;
+        const int expected = in ? nearestRest(L, x) : -7;
+        mismatches += O.at(i, j, k) != expected;
+      }
+  EXPECT_GT(outerLayer, inside / 5);  // the test is about the outer layer
+  EXPECT_LE(mismatches, out.voxelCount() / 10000 + nearBoundary);
+  const std::size_t written = rep.coveredVoxels + rep.extrapolatedVoxels;
+  EXPECT_LE(std::max(written, inside) - std::min(written, inside), nearBoundary + out.voxelCount() / 10000);
+}
+
+TEST(ResamplePull, ExtrapolationNeverPaintsBackground) {
+  // Two boxes with a background gap (i = 11, 12) between them at rest.
+  ImageGrid g;
+  g.dims = {24, 10, 10};
+  g.origin = {5, -3, 2};
+  repose::LabelVolume L;
+  L.grid = g;
+  L.data.assign(g.voxelCount(), 0);
+  for (int k = 0; k < 10; ++k)
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 24; ++i) L.at(i, j, k) = i <= 10 ? 3 : i >= 13 ? 5 : 0;
+  // Peeled meshes of both boxes; A's tets come first, so A's extension would win any contest.
+  Points VA, VB;
+  Tets TA, TB;
+  boxMesh(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(9, 8, 8), {4, 3, 3}, VA, TA);
+  boxMesh(Eigen::Vector3d(14, 1, 1), Eigen::Vector3d(22, 8, 8), {4, 3, 3}, VB, TB);
+  Points V(VA.rows() + VB.rows(), 3);
+  V << VA, VB;
+  Tets T(TA.rows() + TB.rows(), 4);
+  T << TA, (TB.array() + int(VA.rows())).matrix();
+  for (Eigen::Index v = 0; v < V.rows(); ++v) V.row(v) = g.indexToPhysical(V.row(v).transpose()).transpose();
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;  // d = 2 voxels: the extensions overlap across the gap
+  repose::PullResampleReport rep;
+  const repose::LabelVolume O = repose::resampleLabelsPull(L, V, V, T, g, opt, 0, &rep);
+  EXPECT_EQ(O.data, L.data);
+  std::size_t nonzero = 0;
+  for (const auto v : L.data) nonzero += v != 0;
+  EXPECT_EQ(rep.coveredVoxels + rep.extrapolatedVoxels, nonzero);  // no background written by the extension
+  // Move A by +2 voxels along i: its extension now reaches i = 13, where it samples the rest gap
+  // (background) and must leave the voxel to B's extension.
+  Points P = V;
+  for (Eigen::Index v = 0; v < VA.rows(); ++v) P.row(v) += 2.0 * g.direction.col(0).transpose();
+  const repose::LabelVolume Q = repose::resampleLabelsPull(L, V, P, T, g, opt, 0, &rep);
+  for (int k = 0; k < 10; ++k)
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 24; ++i)
+        ASSERT_EQ(Q.at(i, j, k), i < 2 ? 0 : i <= 12 ? 3 : 5) << i << " " << j << " " << k;
+}
+
+TEST(ResamplePull, RestCoverageKeepsExtensionsOutOfNeighbourInteriors) {
+  // An "arm" B resting against a "torso" A (labels touch, meshes peeled apart), then moved away by 4.
+  ImageGrid g;
+  g.dims = {32, 8, 8};
+  repose::LabelVolume L;
+  L.grid = g;
+  L.data.assign(g.voxelCount(), 0);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < 32; ++i) L.at(i, j, k) = i <= 10 ? 3 : i <= 26 ? 5 : 0;
+  Points VA, VB;
+  Tets TA, TB;
+  boxMesh(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(9, 6, 6), {4, 3, 3}, VA, TA);
+  boxMesh(Eigen::Vector3d(12, 1, 1), Eigen::Vector3d(25, 6, 6), {6, 3, 3}, VB, TB);
+  Points V(VA.rows() + VB.rows(), 3);
+  V << VA, VB;
+  Tets T(TA.rows() + TB.rows(), 4);
+  T << TA, (TB.array() + int(VA.rows())).matrix();
+  Points P = V;
+  P.bottomRows(VB.rows()).col(0).array() += 4.0;
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  const repose::MaskVolume C = repose::restMeshCoverage(g, V, T);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;
+  opt.extrapolationDistance = 6.0;  // reaches 6 voxels: across the contact deep into the other part
+  const repose::LabelVolume without = repose::resampleLabelsPull(L, V, P, T, g, opt, 0);
+  opt.restCoverage = &C;
+  const repose::LabelVolume with = repose::resampleLabelsPull(L, V, P, T, g, opt, 0);
+  for (int k = 2; k <= 5; ++k)
+    for (int j = 2; j <= 5; ++j) {
+      // Posed i = 14: A's extension samples rest i = 14, deep inside B (which has moved away).
+      EXPECT_EQ(without.at(14, j, k), 5);
+      EXPECT_NE(with.at(14, j, k), 5) << j << " " << k;
+      EXPECT_EQ(with.at(10, j, k), 3);  // A's own skin layer is still restored
+      EXPECT_EQ(with.at(30, j, k), 5);  // and B's, moved along with B
+    }
+  repose::MaskVolume wrong = C;
+  wrong.data.pop_back();
+  opt.restCoverage = &wrong;
+  EXPECT_THROW(repose::resampleLabelsPull(L, V, P, T, g, opt, 0), std::invalid_argument);
 }

@@ -12,15 +12,31 @@
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
+#include "vtkSMPTools.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnstructuredGrid.h"
 
 #include "resample_pull.h"
+#include "tet_boundary.h"
 
+#include <algorithm>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 vtkStandardNewMacro(vtkReposePosedVolume);
+
+struct vtkReposePosedVolume::Internals
+{
+  // Boundary of the rest mesh's tets, and what it was computed from.
+  std::unique_ptr<repose::TetBoundary> Boundary;
+  vtkCellArray* Cells = nullptr;
+  vtkMTimeType CellsTime = 0;
+  vtkIdType NumberOfCells = -1;
+  // Rest-grid voxels inside the rest mesh, and the rest points and grid it was computed for.
+  std::unique_ptr<repose::MaskVolume> Coverage;
+  vtkMTimeType CoverageTime = 0;
+};
 
 namespace
 {
@@ -31,6 +47,14 @@ void CopyCast(const S* src, std::size_t n, D* dst)
   {
     dst[i] = static_cast<D>(src[i]);
   }
+}
+
+// Output buffers are hundreds of MB: copy (and first-touch) them in parallel.
+template <class T>
+void ParallelCopy(const std::vector<T>& src, T* dst)
+{
+  vtkSMPTools::For(0, static_cast<vtkIdType>(src.size()), 1 << 20,
+    [&](vtkIdType b, vtkIdType e) { std::copy(src.begin() + b, src.begin() + e, dst + b); });
 }
 
 template <class D>
@@ -120,9 +144,15 @@ void GridToArrays(const repose::ImageGrid& g, int ext[6], double origin[3], doub
 }
 
 vtkReposePosedVolume::vtkReposePosedVolume()
+  : Internal(new Internals)
 {
   this->SetNumberOfInputPorts(3);
   this->SetNumberOfOutputPorts(1);
+}
+
+vtkReposePosedVolume::~vtkReposePosedVolume()
+{
+  delete this->Internal;
 }
 
 int vtkReposePosedVolume::FillInputPortInformation(int port, vtkInformation* info)
@@ -242,6 +272,34 @@ int vtkReposePosedVolume::RequestData(
     const repose::Points posedNodes = ToPoints(posedMesh->GetPoints());
     const repose::Tets tets = ToTets(restMesh, "rest mesh");
     const repose::ImageGrid outGrid = repose::posedOutputGrid(rest, posedNodes, this->PaddingVoxels);
+    repose::PullResampleOptions options;
+    options.extrapolationDistance = this->ExtrapolationDistance;
+    if (this->ExtrapolationDistance != 0)
+    {
+      // The boundary depends on the rest topology only: recompute it when the cells change.
+      Internals& in = *this->Internal;
+      vtkCellArray* cells = restMesh->GetCells();
+      const vtkMTimeType cellsTime = cells ? cells->GetMTime() : 0;
+      if (!in.Boundary || in.Cells != cells || in.CellsTime != cellsTime ||
+        in.NumberOfCells != restMesh->GetNumberOfCells())
+      {
+        in.Boundary.reset(new repose::TetBoundary(repose::tetBoundary(tets)));
+        in.Cells = cells;
+        in.CellsTime = cellsTime;
+        in.NumberOfCells = restMesh->GetNumberOfCells();
+      }
+      options.boundary = in.Boundary.get();
+      // Rest coverage depends on the rest points and grid too (MTimes grow monotonically, so the
+      // newest of the inputs identifies them).
+      const vtkMTimeType coverageTime = std::max({ cellsTime, restMesh->GetPoints()->GetMTime(),
+        restMesh->GetMTime(), image->GetMTime() });
+      if (!in.Coverage || in.CoverageTime != coverageTime || !in.Coverage->grid.sameGridAs(rest))
+      {
+        in.Coverage.reset(new repose::MaskVolume(repose::restMeshCoverage(rest, restNodes, tets)));
+        in.CoverageTime = coverageTime;
+      }
+      options.restCoverage = in.Coverage.get();
+    }
     repose::PullResampleReport report;
     vtkSmartPointer<vtkDataArray> outScalars;
     if (this->Interpolation == Nearest)
@@ -250,10 +308,10 @@ int vtkReposePosedVolume::RequestData(
       labels.grid = rest;
       CopyScalars(scalars, labels.data);
       const repose::LabelVolume result = repose::resampleLabelsPull(labels, restNodes, posedNodes, tets,
-        outGrid, static_cast<std::int32_t>(this->BackgroundValue), &report);
+        outGrid, options, static_cast<std::int32_t>(this->BackgroundValue), &report);
       auto array = vtkSmartPointer<vtkIntArray>::New();
       array->SetNumberOfTuples(static_cast<vtkIdType>(result.data.size()));
-      std::copy(result.data.begin(), result.data.end(), array->GetPointer(0));
+      ParallelCopy(result.data, array->GetPointer(0));
       outScalars = array;
     }
     else
@@ -262,10 +320,10 @@ int vtkReposePosedVolume::RequestData(
       values.grid = rest;
       CopyScalars(scalars, values.data);
       const repose::IntensityVolume result = repose::resampleIntensityPull(values, restNodes, posedNodes,
-        tets, outGrid, static_cast<float>(this->BackgroundValue), &report);
+        tets, outGrid, options, static_cast<float>(this->BackgroundValue), &report);
       auto array = vtkSmartPointer<vtkFloatArray>::New();
       array->SetNumberOfTuples(static_cast<vtkIdType>(result.data.size()));
-      std::copy(result.data.begin(), result.data.end(), array->GetPointer(0));
+      ParallelCopy(result.data, array->GetPointer(0));
       outScalars = array;
     }
     outScalars->SetName(scalars->GetName() ? scalars->GetName() : "ImageScalars");
@@ -278,6 +336,7 @@ int vtkReposePosedVolume::RequestData(
     output->SetDirectionMatrix(direction);
     output->GetPointData()->SetScalars(outScalars);
     this->CoveredVoxels = static_cast<vtkIdType>(report.coveredVoxels);
+    this->ExtrapolatedVoxels = static_cast<vtkIdType>(report.extrapolatedVoxels);
     this->InvertedTets = static_cast<vtkIdType>(report.invertedTets);
     this->LastResampleTime = report.seconds;
   }
@@ -295,7 +354,9 @@ void vtkReposePosedVolume::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Interpolation: " << (this->Interpolation == Nearest ? "Nearest" : "Linear") << "\n";
   os << indent << "BackgroundValue: " << this->BackgroundValue << "\n";
   os << indent << "PaddingVoxels: " << this->PaddingVoxels << "\n";
+  os << indent << "ExtrapolationDistance: " << this->ExtrapolationDistance << "\n";
   os << indent << "CoveredVoxels: " << this->CoveredVoxels << "\n";
+  os << indent << "ExtrapolatedVoxels: " << this->ExtrapolatedVoxels << "\n";
   os << indent << "InvertedTets: " << this->InvertedTets << "\n";
   os << indent << "LastResampleTime: " << this->LastResampleTime << "\n";
 }

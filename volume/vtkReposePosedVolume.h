@@ -6,6 +6,9 @@
 // tetrahedra). Input 2: POSED tet mesh (same topology). Output: vtkImageData on the rest lattice
 // extended to hold the posed body (+PaddingVoxels), same spacing and direction matrix.
 // Nearest: int labels (VTK_INT output); Linear: trilinear intensities (VTK_FLOAT output).
+// The tet mesh stops short of the body's outer voxel layer (the mask is peeled before meshing), so the
+// boundary tets are extrapolated outward by ExtrapolationDistance; the mesh boundary is computed once
+// per rest topology and cached between poses.
 
 #include "ReposeVolumeModule.h"
 #include "vtkImageAlgorithm.h"
@@ -35,8 +38,16 @@ public:
   vtkSetClampMacro(PaddingVoxels, int, 0, 1000);
   vtkGetMacro(PaddingVoxels, int);
 
+  /// How far (mm) the boundary tets are extrapolated outward to fill voxels outside the mesh: labels
+  /// only where the sampled rest label is not BackgroundValue, intensities only inside the rest image.
+  /// Negative = automatic (2 x the rest image's largest spacing, the default); 0 = off.
+  vtkSetMacro(ExtrapolationDistance, double);
+  vtkGetMacro(ExtrapolationDistance, double);
+
   /// Statistics of the last execution.
   vtkGetMacro(CoveredVoxels, vtkIdType);
+  /// Voxels outside every posed tet filled by the extrapolation.
+  vtkGetMacro(ExtrapolatedVoxels, vtkIdType);
   vtkGetMacro(InvertedTets, vtkIdType);
   /// Seconds spent in the resampler itself.
   vtkGetMacro(LastResampleTime, double);
@@ -48,7 +59,7 @@ public:
 
 protected:
   vtkReposePosedVolume();
-  ~vtkReposePosedVolume() override = default;
+  ~vtkReposePosedVolume() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
@@ -58,11 +69,16 @@ protected:
   int Interpolation = Nearest;
   double BackgroundValue = 0;
   int PaddingVoxels = 2;
+  double ExtrapolationDistance = -1.0;
   vtkIdType CoveredVoxels = 0;
+  vtkIdType ExtrapolatedVoxels = 0;
   vtkIdType InvertedTets = 0;
   double LastResampleTime = 0;
 
 private:
+  struct Internals;  // cached mesh boundary
+  Internals* Internal;
+
   vtkReposePosedVolume(const vtkReposePosedVolume&) = delete;
   void operator=(const vtkReposePosedVolume&) = delete;
 };

@@ -27,12 +27,21 @@ struct PullResampleOptions {
   const TetBoundary* boundary = nullptr;
   /// d in mm; negative = 2 x the largest spacing of the rest grid; 0 = no extrapolation.
   double extrapolationDistance = -1.0;
+  /// Optional restMeshCoverage(rest grid, restNodes, tets): the extension then samples rest voxels
+  /// inside the rest mesh only within one voxel (largest spacing) of its own boundary face, so a boundary
+  /// tet's extension does not copy a neighbouring part's interior (e.g. an arm resting against the
+  /// torso, then raised), while points just outside its own face may still round to voxels just inside.
+  const MaskVolume* restCoverage = nullptr;
 };
 
 /// Output grid: the rest grid's spacing and direction, its lattice extended (by whole voxels, so
 /// unmoved anatomy lands on the same voxel centres) to hold the rest extent and the posed nodes,
 /// plus `paddingVoxels` on every side.
 ImageGrid posedOutputGrid(const ImageGrid& rest, const Points& posedNodes, int paddingVoxels = 2);
+
+/// Rest-grid mask: 1 where the voxel centre lies in some rest tet. Depends on the rest mesh and grid
+/// only, so compute it once per rest mesh (it costs about one resampling pass).
+MaskVolume restMeshCoverage(const ImageGrid& restGrid, const Points& restNodes, const Tets& tets);
 
 /// Labels: nearest rest voxel; voxels outside the posed mesh (and its extension) are `background`.
 /// restNodes/posedNodes #V by 3, tets #T by 4. Threaded with parallelFor; deterministic (a voxel

@@ -69,7 +69,7 @@ TetBoundary tetBoundary(const Tets& tets) {
     std::uint8_t m = 0;
     for (int a = 0; a < 4; ++a) m |= std::uint8_t(isBoundary[4 * t + a] << a);
     out.boundaryFaceMask[t] = m;
-    out.boundaryFaces += std::size_t(__builtin_popcount(m));
+    out.boundaryFaces += std::size_t(isBoundary[4 * t]) + isBoundary[4 * t + 1] + isBoundary[4 * t + 2] + isBoundary[4 * t + 3];
     out.boundaryTets += m != 0;
   }
   return out;
