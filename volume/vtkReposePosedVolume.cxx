@@ -17,6 +17,7 @@
 #include "vtkUnstructuredGrid.h"
 
 #include "resample_pull.h"
+#include "rigid_bone_overlay.h"
 #include "tet_boundary.h"
 
 #include <algorithm>
@@ -307,8 +308,20 @@ int vtkReposePosedVolume::RequestData(
       repose::LabelVolume labels;
       labels.grid = rest;
       CopyScalars(scalars, labels.data);
-      const repose::LabelVolume result = repose::resampleLabelsPull(labels, restNodes, posedNodes, tets,
+      repose::LabelVolume result = repose::resampleLabelsPull(labels, restNodes, posedNodes, tets,
         outGrid, options, static_cast<std::int32_t>(this->BackgroundValue), &report);
+      this->RigidBoneVoxels = 0;
+      vtkDataArray* fixed = restMesh->GetPointData()->GetArray("FixedBone");
+      if (this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints())
+      {
+        std::vector<int> fixedBone(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
+        for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
+        {
+          fixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
+        }
+        const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, fixedBone);
+        this->RigidBoneVoxels = static_cast<vtkIdType>(repose::overlayRigidBones(result, labels, bones));
+      }
       auto array = vtkSmartPointer<vtkIntArray>::New();
       array->SetNumberOfTuples(static_cast<vtkIdType>(result.data.size()));
       ParallelCopy(result.data, array->GetPointer(0));
@@ -351,6 +364,7 @@ int vtkReposePosedVolume::RequestData(
 void vtkReposePosedVolume::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
+  os << indent << "RigidBones: " << this->RigidBones << "\n";
   os << indent << "Interpolation: " << (this->Interpolation == Nearest ? "Nearest" : "Linear") << "\n";
   os << indent << "BackgroundValue: " << this->BackgroundValue << "\n";
   os << indent << "PaddingVoxels: " << this->PaddingVoxels << "\n";

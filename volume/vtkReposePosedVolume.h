@@ -44,6 +44,14 @@ public:
   vtkSetMacro(ExtrapolationDistance, double);
   vtkGetMacro(ExtrapolationDistance, double);
 
+  /// Labels only: after the pull, place every bone's voxels exactly where its rigid motion takes them
+  /// (bones and their labels from the rest mesh's point data "FixedBone"). Default on.
+  vtkSetMacro(RigidBones, bool);
+  vtkGetMacro(RigidBones, bool);
+  vtkBooleanMacro(RigidBones, bool);
+  /// Voxels changed by the rigid-bone pass in the last execution.
+  vtkGetMacro(RigidBoneVoxels, vtkIdType);
+
   /// Statistics of the last execution.
   vtkGetMacro(CoveredVoxels, vtkIdType);
   /// Voxels outside every posed tet filled by the extrapolation.
@@ -70,6 +78,8 @@ protected:
   double BackgroundValue = 0;
   int PaddingVoxels = 2;
   double ExtrapolationDistance = -1.0;
+  bool RigidBones = true;
+  vtkIdType RigidBoneVoxels = 0;
   vtkIdType CoveredVoxels = 0;
   vtkIdType ExtrapolatedVoxels = 0;
   vtkIdType InvertedTets = 0;

@@ -24,6 +24,8 @@ constexpr double kBaryEps = 1e-7;
 int slabSlices(int nz) { return std::min(32, std::max(8, nz / 12)); }
 // Per-voxel coverage marks of a slab.
 constexpr std::uint8_t kEmpty = 0, kCovered = 1, kExtrapolated = 2;
+// Extrapolated voxels farther than this many 6-steps from the posed mesh's voxels are detached debris.
+constexpr int kAttachReach = 4;
 
 void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& restNodes,
               const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
@@ -721,6 +723,56 @@ std::size_t fillPinholes(T* out, const std::vector<std::uint8_t>& marks, int nx,
   return filled.load();
 }
 
+// Extrapolated voxels must hang on to the body: in a concave crease the inflated boundary tets fan
+// out and can copy skin a voxel or two away from the posed surface. Keeps the extrapolated voxels
+// 6-connected (within `reach` steps) to voxels inside the posed mesh; the others become background
+// (marked empty again). Returns how many were dropped.
+template <class T>
+std::size_t dropDetachedExtrapolation(T* out, std::vector<std::uint8_t>& marks, int nx, int ny, int nz, int reach,
+                                      T background) {
+  constexpr std::uint8_t kAttached = 3;
+  const std::size_t sliceSize = std::size_t(nx) * ny, n = marks.size();
+  std::vector<std::uint8_t> next;
+  for (int pass = 0; pass < reach; ++pass) {
+    next = marks;
+    std::atomic<std::size_t> changed{0};
+    parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
+      std::size_t local = 0;
+      for (std::size_t k = kb; k < ke; ++k)
+        for (int j = 0; j < ny; ++j)
+          for (int i = 0; i < nx; ++i) {
+            const std::size_t v = k * sliceSize + std::size_t(j) * nx + std::size_t(i);
+            if (marks[v] != kExtrapolated) continue;
+            auto attached = [&](bool ok, std::size_t w) { return ok && (marks[w] == kCovered || marks[w] == kAttached); };
+            if (attached(i > 0, v - 1) || attached(i + 1 < nx, v + 1) || attached(j > 0, v - std::size_t(nx)) ||
+                attached(j + 1 < ny, v + std::size_t(nx)) || attached(k > 0, v - sliceSize) ||
+                attached(int(k) + 1 < nz, v + sliceSize)) {
+              next[v] = kAttached;
+              ++local;
+            }
+          }
+      changed += local;
+    }, 1);
+    marks.swap(next);
+    if (changed.load() == 0) break;
+  }
+  std::atomic<std::size_t> dropped{0};
+  parallelFor(n, [&](std::size_t b, std::size_t e) {
+    std::size_t local = 0;
+    for (std::size_t v = b; v < e; ++v) {
+      if (marks[v] == kExtrapolated) {
+        out[v] = background;
+        marks[v] = kEmpty;
+        ++local;
+      } else if (marks[v] == kAttached) {
+        marks[v] = kExtrapolated;
+      }
+    }
+    dropped += local;
+  });
+  return dropped.load();
+}
+
 std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
   std::int32_t best = background;
   int bestCount = 0;
@@ -763,10 +815,12 @@ LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes,
   const bool extrapolate = !pr.ext.offset.empty();
   run(pr, tets, kernel, report, start, outGrid.voxelCount(), extrapolate ? &marks : nullptr);
   if (extrapolate) {
+    const std::size_t dropped = dropDetachedExtrapolation(out.data.data(), marks, pr.nx, pr.ny, pr.nz,
+                                                          kAttachReach, background);
     const std::size_t filled = fillPinholes(out.data.data(), marks, pr.nx, pr.ny, pr.nz,
                                             [background](const std::int32_t* v, int n) { return mostCommon(v, n, background); });
     if (report) {
-      report->extrapolatedVoxels += filled;
+      report->extrapolatedVoxels = report->extrapolatedVoxels + filled - dropped;
       report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
   }
@@ -797,13 +851,15 @@ IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points&
   const bool extrapolate = !pr.ext.offset.empty();
   run(pr, tets, kernel, report, start, outGrid.voxelCount(), extrapolate ? &marks : nullptr);
   if (extrapolate) {
+    const std::size_t dropped = dropDetachedExtrapolation(out.data.data(), marks, pr.nx, pr.ny, pr.nz,
+                                                          kAttachReach, background);
     const std::size_t filled = fillPinholes(out.data.data(), marks, pr.nx, pr.ny, pr.nz, [](const float* v, int n) {
       double sum = 0;
       for (int a = 0; a < n; ++a) sum += v[a];
       return float(sum / n);
     });
     if (report) {
-      report->extrapolatedVoxels += filled;
+      report->extrapolatedVoxels = report->extrapolatedVoxels + filled - dropped;
       report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
   }

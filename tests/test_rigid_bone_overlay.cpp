@@ -1,0 +1,71 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "rigid_bone_overlay.h"
+
+using namespace repose;
+
+namespace {
+LabelVolume boxVolume() {
+  LabelVolume v;
+  v.grid.dims = {30, 30, 30};
+  v.grid.origin = {-14.5, -14.5, -14.5};
+  v.grid.spacing = {1, 1, 1};
+  v.data.assign(v.grid.voxelCount(), 1);  // soft tissue everywhere
+  for (int k = 8; k < 22; ++k)
+    for (int j = 12; j < 18; ++j)
+      for (int i = 10; i < 20; ++i) v.at(i, j, k) = 7;  // the bone
+  return v;
+}
+}  // namespace
+
+TEST(RigidBoneOverlay, FitsTransformAndPlacesBoneExactly) {
+  const LabelVolume rest = boxVolume();
+  // Fixed nodes of bone 0: centres of some bone voxels; one free node.
+  Points restNodes(5, 3);
+  restNodes << rest.grid.indexToPhysical({10, 12, 8}).transpose(), rest.grid.indexToPhysical({19, 12, 8}).transpose(),
+      rest.grid.indexToPhysical({10, 17, 21}).transpose(), rest.grid.indexToPhysical({19, 17, 15}).transpose(),
+      Eigen::RowVector3d(0, 0, 0);
+  const std::vector<int> fixedBone = {0, 0, 0, 0, -1};
+  Eigen::Isometry3d G = Eigen::Isometry3d::Identity();
+  G.linear() = Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  G.translation() = Eigen::Vector3d(1.5, -2, 0.7);
+  Points posedNodes = restNodes;
+  for (int v = 0; v < 4; ++v) posedNodes.row(v) = (G * restNodes.row(v).transpose()).transpose();
+  posedNodes.row(4) << 3, 3, 3;  // free nodes do not disturb the fit
+
+  const auto bones = rigidBonesFromMesh(rest, restNodes, posedNodes, fixedBone);
+  ASSERT_EQ(bones.size(), 1u);
+  EXPECT_LT((bones[0].transform.matrix() - G.matrix()).norm(), 1e-9);
+  ASSERT_EQ(bones[0].labels, std::vector<std::int32_t>{7});
+
+  // A posed volume where the pull smeared the bone (shifted by one voxel): the overlay fixes it.
+  LabelVolume posed = rest;
+  for (int k = 0; k < 30; ++k)
+    for (int j = 0; j < 30; ++j)
+      for (int i = 0; i < 30; ++i) posed.at(i, j, k) = (i > 0 && rest.at(i - 1, j, k) == 7) ? 7 : 1;
+  const std::size_t changed = overlayRigidBones(posed, rest, bones);
+  EXPECT_GT(changed, 0u);
+  int mismatches = 0, boneVoxels = 0;
+  for (int k = 0; k < 30; ++k)
+    for (int j = 0; j < 30; ++j)
+      for (int i = 0; i < 30; ++i) {
+        const Eigen::Vector3d r = rest.grid.physicalToIndex(G.inverse() * posed.grid.indexToPhysical({double(i), double(j), double(k)}));
+        const int ri = int(std::lround(r.x())), rj = int(std::lround(r.y())), rk = int(std::lround(r.z()));
+        const bool expected = rest.grid.contains(ri, rj, rk) && rest.at(ri, rj, rk) == 7;
+        boneVoxels += expected;
+        mismatches += expected != (posed.at(i, j, k) == 7);
+      }
+  EXPECT_GT(boneVoxels, 700);
+  EXPECT_EQ(mismatches, 0);
+}
+
+TEST(RigidBoneOverlay, CollinearNodesAndBadInput) {
+  const LabelVolume rest = boxVolume();
+  Points line(3, 3);
+  line << 0, 0, 0, 1, 0, 0, 2, 0, 0;
+  EXPECT_TRUE(rigidBonesFromMesh(rest, line, line, {0, 0, 0}).empty());
+  EXPECT_THROW(rigidBonesFromMesh(rest, line, line, {0, 0}), std::invalid_argument);
+}

@@ -1,0 +1,154 @@
+#include "rigid_bone_overlay.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+
+#include "parallel_for.h"
+
+namespace repose {
+namespace {
+
+bool nearestVoxel(const ImageGrid& g, const Eigen::Vector3d& x, std::size_t& index) {
+  const Eigen::Vector3d f = g.physicalToIndex(x);
+  const long i = std::lround(f.x()), j = std::lround(f.y()), k = std::lround(f.z());
+  if (!g.contains(int(i), int(j), int(k))) return false;
+  index = g.linearIndex(int(i), int(j), int(k));
+  return true;
+}
+
+}  // namespace
+
+std::vector<RigidBone> rigidBonesFromMesh(const LabelVolume& rest, const Points& restNodes,
+                                          const Points& posedNodes, const std::vector<int>& fixedBone) {
+  if (restNodes.rows() != posedNodes.rows() || fixedBone.size() != std::size_t(restNodes.rows()))
+    throw std::invalid_argument("rigid bones: rest nodes, posed nodes and fixed bones differ in count");
+  int boneCount = 0;
+  for (int b : fixedBone) boneCount = std::max(boneCount, b + 1);
+  std::vector<std::vector<Eigen::Index>> nodesOf(static_cast<std::size_t>(boneCount));
+  for (Eigen::Index v = 0; v < restNodes.rows(); ++v)
+    if (fixedBone[std::size_t(v)] >= 0) nodesOf[std::size_t(fixedBone[std::size_t(v)])].push_back(v);
+
+  std::vector<RigidBone> bones;
+  for (const auto& nodes : nodesOf) {
+    if (nodes.size() < 3) continue;
+    Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+    for (Eigen::Index v : nodes) {
+      ca += restNodes.row(v).transpose();
+      cb += posedNodes.row(v).transpose();
+    }
+    ca /= double(nodes.size());
+    cb /= double(nodes.size());
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero(), spread = Eigen::Matrix3d::Zero();
+    for (Eigen::Index v : nodes) {
+      const Eigen::Vector3d a = restNodes.row(v).transpose() - ca;
+      H += a * (posedNodes.row(v).transpose() - cb).transpose();
+      spread += a * a.transpose();
+    }
+    // Collinear (or coincident) nodes do not fix a rotation.
+    const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvalues();
+    if (!(ev[1] > 1e-9 * std::max(1.0, ev[2]))) continue;
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+    RigidBone bone;
+    const Eigen::Matrix3d R = svd.matrixV() * D * svd.matrixU().transpose();
+    bone.transform.linear() = R;
+    bone.transform.translation() = cb - R * ca;
+    std::set<std::int32_t> labels;
+    for (Eigen::Index v : nodes) {
+      std::size_t index;
+      if (nearestVoxel(rest.grid, restNodes.row(v).transpose(), index) && rest.data[index] != 0)
+        labels.insert(rest.data[index]);
+    }
+    bone.labels.assign(labels.begin(), labels.end());
+    if (!bone.labels.empty()) bones.push_back(std::move(bone));
+  }
+  return bones;
+}
+
+std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const std::vector<RigidBone>& bones) {
+  if (rest.data.size() != rest.grid.voxelCount() || posed.data.size() != posed.grid.voxelCount())
+    throw std::invalid_argument("rigid bones: volume sizes do not match their grids");
+  std::int32_t maxLabel = 0;
+  for (const auto& b : bones)
+    for (auto l : b.labels) maxLabel = std::max(maxLabel, l);
+  // Which bone each label belongs to (-1: not bone), and each bone's rest bounding box in index space.
+  std::vector<int> boneOfLabel(std::size_t(maxLabel) + 1, -1);
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    for (auto l : bones[b].labels)
+      if (l >= 0) boneOfLabel[std::size_t(l)] = int(b);
+  const auto& rd = rest.grid.dims;
+  std::vector<Eigen::AlignedBox3i> restBox(bones.size());
+  for (int k = 0; k < rd[2]; ++k)
+    for (int j = 0; j < rd[1]; ++j)
+      for (int i = 0; i < rd[0]; ++i) {
+        const std::int32_t l = rest.data[rest.grid.linearIndex(i, j, k)];
+        if (l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0)
+          restBox[std::size_t(boneOfLabel[std::size_t(l)])].extend(Eigen::Vector3i(i, j, k));
+      }
+  auto isBone = [&](std::int32_t l) { return l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0; };
+
+  std::atomic<std::size_t> changed{0};
+  const auto& od = posed.grid.dims;
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    if (restBox[b].isEmpty()) continue;
+    const Eigen::Isometry3d& G = bones[b].transform;
+    const Eigen::Isometry3d Ginv = G.inverse();
+    // Output index box of the moved rest box (one voxel of margin).
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d corner((c & 1 ? restBox[b].max().x() + 1.0 : restBox[b].min().x() - 1.0),
+                                   (c & 2 ? restBox[b].max().y() + 1.0 : restBox[b].min().y() - 1.0),
+                                   (c & 4 ? restBox[b].max().z() + 1.0 : restBox[b].min().z() - 1.0));
+      const Eigen::Vector3d o = posed.grid.physicalToIndex(G * rest.grid.indexToPhysical(corner));
+      lo = lo.cwiseMin(o);
+      hi = hi.cwiseMax(o);
+    }
+    int lo3[3], hi3[3];
+    for (int a = 0; a < 3; ++a) {
+      lo3[a] = std::max(0, int(std::floor(lo[a])));
+      hi3[a] = std::min(od[a] - 1, int(std::ceil(hi[a])));
+    }
+    if (lo3[0] > hi3[0] || lo3[1] > hi3[1] || lo3[2] > hi3[2]) continue;
+    // Output index -> rest continuous index is affine.
+    const Eigen::Matrix3d toRest = rest.grid.spacing.cwiseInverse().asDiagonal() * rest.grid.direction.transpose() *
+                                   Ginv.linear() * posed.grid.direction * posed.grid.spacing.asDiagonal();
+    const Eigen::Vector3d restOfOrigin =
+        rest.grid.physicalToIndex(Ginv * posed.grid.indexToPhysical(Eigen::Vector3d::Zero()));
+    parallelFor(std::size_t(hi3[2] - lo3[2] + 1), [&](std::size_t kb, std::size_t ke) {
+      std::size_t local = 0;
+      for (int k = lo3[2] + int(kb); k < lo3[2] + int(ke); ++k)
+        for (int j = lo3[1]; j <= hi3[1]; ++j) {
+          Eigen::Vector3d r = restOfOrigin + toRest * Eigen::Vector3d(lo3[0], j, k);
+          const Eigen::Vector3d step = toRest.col(0);
+          for (int i = lo3[0]; i <= hi3[0]; ++i, r += step) {
+            const long ri = std::lround(r.x()), rj = std::lround(r.y()), rk = std::lround(r.z());
+            const bool inRest = ri >= 0 && rj >= 0 && rk >= 0 && ri < rd[0] && rj < rd[1] && rk < rd[2];
+            const std::int32_t restLabel = inRest ? rest.data[rest.grid.linearIndex(int(ri), int(rj), int(rk))] : 0;
+            std::int32_t& out = posed.data[posed.grid.linearIndex(i, j, k)];
+            const bool restIsThisBone = isBone(restLabel) && boneOfLabel[std::size_t(restLabel)] == int(b);
+            const bool outIsThisBone = isBone(out) && boneOfLabel[std::size_t(out)] == int(b);
+            std::int32_t value = out;
+            if (restIsThisBone)
+              value = restLabel;
+            else if (outIsThisBone && !isBone(restLabel))
+              value = restLabel;
+            if (value != out) {
+              out = value;
+              ++local;
+            }
+          }
+        }
+      changed += local;
+    }, 1);
+  }
+  return changed.load();
+}
+
+}  // namespace repose
