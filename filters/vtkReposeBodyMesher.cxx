@@ -29,6 +29,7 @@
 
 #include "body_mask.h"
 #include "image_grid.h"
+#include "mesh_ordering.h"
 #include "mesh_tagging.h"
 #include "skeleton.h"
 #include "tet_mesher.h"
@@ -277,6 +278,7 @@ int vtkReposeBodyMesher::RequestData(
            << " s)\n";
 
     t = Clock::now();
+    repose::reorderMeshSpatially(mesh);
     repose::tagMesh(mesh, labels, boneOfLabel);
     const repose::ComponentReport components = repose::keepBoneComponents(mesh);
     if (components.componentsDropped > 0)

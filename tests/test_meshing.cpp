@@ -2,11 +2,16 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <numeric>
+#include <random>
 #include <cmath>
 #include <set>
 #include <stdexcept>
 
 #include "body_mask.h"
+#include "mesh_ordering.h"
 #include "mesh_tagging.h"
 #include "tet_mesher.h"
 
@@ -398,4 +403,88 @@ TEST(MeshTagging, TwoBoneVolume) {
   EXPECT_EQ(mesh.tetLabel[0], 20);
   // Tet 1: i=(14.4+10+25+3.2)/4=13.15, j=k=3.25 -> voxel (13,3,3): label 21.
   EXPECT_EQ(mesh.tetLabel[1], 21);
+}
+
+TEST(MeshOrdering, MortonRenumberingKeepsTheMesh) {
+  // A jittered grid of cubes split into 6 tets, numbered in a scrambled order.
+  const int n = 6;
+  TetMesh mesh;
+  mesh.nodes.resize((n + 1) * (n + 1) * (n + 1), 3);
+  auto id = [&](int i, int j, int k) { return (k * (n + 1) + j) * (n + 1) + i; };
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) mesh.nodes.row(id(i, j, k)) << i + 0.1 * std::sin(i * j + k), j, k;
+  std::vector<Eigen::Vector4i> tets;
+  const int cube[6][4] = {{0, 1, 3, 7}, {0, 1, 7, 5}, {0, 5, 7, 4}, {0, 3, 2, 7}, {0, 2, 6, 7}, {0, 6, 4, 7}};
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        int c[8];
+        for (int b = 0; b < 8; ++b) c[b] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+        for (const auto& t : cube) tets.emplace_back(c[t[0]], c[t[1]], c[t[2]], c[t[3]]);
+      }
+  // Scatter tets and nodes, as TetGen's creation order does.
+  std::mt19937 rng(7);
+  std::shuffle(tets.begin(), tets.end(), rng);
+  std::vector<int> perm(std::size_t(mesh.nodes.rows()));
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  const Points ordered = mesh.nodes;
+  for (std::size_t v = 0; v < perm.size(); ++v) mesh.nodes.row(perm[v]) = ordered.row(Eigen::Index(v));
+  for (auto& t : tets)
+    for (int k = 0; k < 4; ++k) t[k] = perm[std::size_t(t[k])];
+  mesh.tets.resize(Eigen::Index(tets.size()), 4);
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    mesh.tets.row(Eigen::Index(t)) = tets[t].transpose();
+    if (tetVolume(mesh.nodes.row(tets[t][0]), mesh.nodes.row(tets[t][1]), mesh.nodes.row(tets[t][2]),
+                  mesh.nodes.row(tets[t][3])) < 0)
+      std::swap(mesh.tets(Eigen::Index(t), 2), mesh.tets(Eigen::Index(t), 3));
+  }
+  mesh.fixedBone.resize(std::size_t(mesh.nodes.rows()));
+  for (std::size_t v = 0; v < mesh.fixedBone.size(); ++v) mesh.fixedBone[v] = int(v % 3) - 1;
+  mesh.tetLabel.resize(std::size_t(mesh.tets.rows()));
+  for (std::size_t t = 0; t < mesh.tetLabel.size(); ++t) mesh.tetLabel[t] = int(t % 5);
+
+  const TetMesh before = mesh;
+  const std::vector<int> newIndex = reorderMeshSpatially(mesh);
+  ASSERT_EQ(mesh.nodes.rows(), before.nodes.rows());
+  ASSERT_EQ(mesh.tets.rows(), before.tets.rows());
+  EXPECT_NEAR(meshVolume(mesh.nodes, mesh.tets), meshVolume(before.nodes, before.tets), 1e-9);
+  std::vector<int> seen(newIndex.size(), 0);
+  for (std::size_t old = 0; old < newIndex.size(); ++old) {
+    ++seen[std::size_t(newIndex[old])];
+    EXPECT_EQ((mesh.nodes.row(newIndex[old]) - before.nodes.row(Eigen::Index(old))).norm(), 0.0);
+    EXPECT_EQ(mesh.fixedBone[std::size_t(newIndex[old])], before.fixedBone[old]);
+  }
+  for (int s : seen) EXPECT_EQ(s, 1);
+  // The same set of tets (as sorted node tuples, with their labels), all still positive.
+  auto key = [](const Eigen::Vector4i& t, int label) {
+    std::array<int, 5> k{t[0], t[1], t[2], t[3], label};
+    std::sort(k.begin(), k.begin() + 4);
+    return k;
+  };
+  std::vector<std::array<int, 5>> a, b;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    a.push_back(key(mesh.tets.row(t).transpose(), mesh.tetLabel[std::size_t(t)]));
+    Eigen::Vector4i old = before.tets.row(t).transpose();
+    for (int k = 0; k < 4; ++k) old[k] = newIndex[std::size_t(old[k])];
+    b.push_back(key(old, before.tetLabel[std::size_t(t)]));
+    EXPECT_GT(tetVolume(mesh.nodes.row(mesh.tets(t, 0)), mesh.nodes.row(mesh.tets(t, 1)),
+                        mesh.nodes.row(mesh.tets(t, 2)), mesh.nodes.row(mesh.tets(t, 3))), 0);
+  }
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  EXPECT_EQ(a, b);
+  // Neighbouring tets end up close in memory: the index spread of the tets around a node drops well
+  // below that of the scattered order.
+  auto spreadOf = [](const TetMesh& m) {
+    std::vector<std::vector<int>> tetsOf(std::size_t(m.nodes.rows()));
+    for (Eigen::Index t = 0; t < m.tets.rows(); ++t)
+      for (int k = 0; k < 4; ++k) tetsOf[std::size_t(m.tets(t, k))].push_back(int(t));
+    double sum = 0;
+    for (const auto& ts : tetsOf)
+      if (!ts.empty()) sum += *std::max_element(ts.begin(), ts.end()) - *std::min_element(ts.begin(), ts.end());
+    return sum / double(tetsOf.size());
+  };
+  EXPECT_LT(spreadOf(mesh), 0.5 * spreadOf(before));
 }
