@@ -1,5 +1,7 @@
 #include "vtkReposeAutoRig.h"
 
+#include "ReposeImageConversion.h"
+
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
 #include "vtkInformation.h"
@@ -43,28 +45,10 @@ int vtkReposeAutoRig::RequestData(
   try
   {
     repose::LabelVolume labels;
-    int ext[6];
-    input->GetExtent(ext);
-    repose::ImageGrid& g = labels.grid;
-    g.dims = { ext[1] - ext[0] + 1, ext[3] - ext[2] + 1, ext[5] - ext[4] + 1 };
-    double origin[3];
-    input->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
-    const double* spacing = input->GetSpacing();
-    vtkMatrix3x3* d = input->GetDirectionMatrix();
-    for (int r = 0; r < 3; ++r)
+    if (!repose_vtk::ToVolume(input, labels))
     {
-      g.origin[r] = origin[r];
-      g.spacing[r] = spacing[r];
-      for (int c = 0; c < 3; ++c)
-      {
-        g.direction(r, c) = d->GetElement(r, c);
-      }
-    }
-    const vtkIdType n = scalars->GetNumberOfTuples();
-    labels.data.resize(static_cast<std::size_t>(n));
-    for (vtkIdType p = 0; p < n; ++p)
-    {
-      labels.data[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(scalars->GetComponent(p, 0));
+      vtkErrorMacro("the label image's scalars do not match its extent");
+      return 0;
     }
     const repose::LabelTable table = this->LabelTableTSV.empty()
       ? repose::builtinTotalSegmentatorTable()
@@ -77,7 +61,7 @@ int vtkReposeAutoRig::RequestData(
     output->CopyStructure(input);
     vtkNew<vtkIntArray> values;
     values->SetName(scalars->GetName() ? scalars->GetName() : "Labels");
-    values->SetNumberOfTuples(n);
+    values->SetNumberOfTuples(static_cast<vtkIdType>(result.labels.data.size()));
     std::copy(result.labels.data.begin(), result.labels.data.end(), values->GetPointer(0));
     output->GetPointData()->SetScalars(values);
 

@@ -1,5 +1,7 @@
 #include "vtkReposeSurfaceExtractor.h"
 
+#include "ReposeImageConversion.h"
+
 #include "vtkAppendPolyData.h"
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
@@ -41,68 +43,6 @@ vtkStandardNewMacro(vtkReposeSurfaceExtractor);
 
 namespace
 {
-// vtkImageData (any scalar type) -> core volume on the same physical lattice.
-template <class T>
-bool ToVolume(vtkImageData* image, repose::Volume<T>& volume)
-{
-  vtkDataArray* scalars = image ? image->GetPointData()->GetScalars() : nullptr;
-  if (!scalars || scalars->GetNumberOfComponents() != 1)
-  {
-    return false;
-  }
-  int ext[6];
-  image->GetExtent(ext);
-  repose::ImageGrid& g = volume.grid;
-  g.dims = { ext[1] - ext[0] + 1, ext[3] - ext[2] + 1, ext[5] - ext[4] + 1 };
-  double origin[3];
-  image->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
-  const double* spacing = image->GetSpacing();
-  vtkMatrix3x3* d = image->GetDirectionMatrix();
-  for (int r = 0; r < 3; ++r)
-  {
-    g.origin[r] = origin[r];
-    g.spacing[r] = spacing[r];
-    for (int c = 0; c < 3; ++c)
-    {
-      g.direction(r, c) = d->GetElement(r, c);
-    }
-  }
-  const vtkIdType n = scalars->GetNumberOfTuples();
-  if (n != static_cast<vtkIdType>(g.voxelCount()))
-  {
-    return false;
-  }
-  volume.data.resize(static_cast<std::size_t>(n));
-  for (vtkIdType p = 0; p < n; ++p)
-  {
-    volume.data[static_cast<std::size_t>(p)] = static_cast<T>(scalars->GetComponent(p, 0));
-  }
-  return true;
-}
-
-vtkSmartPointer<vtkImageData> ToImage(const repose::MaskVolume& mask)
-{
-  auto image = vtkSmartPointer<vtkImageData>::New();
-  const auto& g = mask.grid;
-  image->SetExtent(0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1);
-  image->SetOrigin(g.origin.data());
-  image->SetSpacing(g.spacing.data());
-  double d[9];
-  for (int r = 0; r < 3; ++r)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      d[3 * r + c] = g.direction(r, c);
-    }
-  }
-  image->SetDirectionMatrix(d);
-  vtkNew<vtkUnsignedCharArray> values;
-  values->SetName("Mask");
-  values->SetNumberOfTuples(static_cast<vtkIdType>(mask.data.size()));
-  std::copy(mask.data.begin(), mask.data.end(), values->GetPointer(0));
-  image->GetPointData()->SetScalars(values);
-  return image;
-}
 
 void SetCellLabel(vtkPolyData* surface, int label)
 {
@@ -278,13 +218,13 @@ int vtkReposeSurfaceExtractor::RequestData(
   try
   {
     repose::LabelVolume labels;
-    if (!ToVolume(labelImage, labels))
+    if (!repose_vtk::ToVolume(labelImage, labels))
     {
       vtkErrorMacro("the label image must have one scalar component per voxel");
       return 0;
     }
     repose::IntensityVolume intensity;
-    if (intensityImage && !ToVolume(intensityImage, intensity))
+    if (intensityImage && !repose_vtk::ToVolume(intensityImage, intensity))
     {
       vtkErrorMacro("the intensity image (input 1) must have one scalar component per voxel");
       return 0;
@@ -318,7 +258,7 @@ int vtkReposeSurfaceExtractor::RequestData(
       options.bodyThreshold = this->BodyThreshold;
       const repose::MaskVolume body =
         repose::bodyMask(labels, intensityImage ? &intensity : nullptr, options);
-      addSurface(ToImage(body), SkinLabel);
+      addSurface(repose_vtk::ToImage(body), SkinLabel);
     }
     if (this->ExtractBones)
     {
@@ -378,7 +318,7 @@ int vtkReposeSurfaceExtractor::RequestData(
             }
           }
         }
-        addSurface(ToImage(crop), label);
+        addSurface(repose_vtk::ToImage(crop), label);
       }
     }
     if (pieces == 0)

@@ -1,0 +1,400 @@
+#include "corotational_fem.h"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <Eigen/Sparse>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include "parallel_for.h"
+
+namespace repose {
+namespace {
+
+double seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+using Mat3 = Eigen::Matrix3d;
+using Vec3 = Eigen::Vector3d;
+using SpMat = Eigen::SparseMatrix<double>;
+
+Vec3 node(const Points& P, int i) { return P.row(i).transpose(); }
+
+/// Rotation of F's polar decomposition, det = +1 even for inverted or degenerate F: the sign goes
+/// to the smallest singular value (Irving et al. 2004), so an inverted tet is pushed back, not flipped.
+Mat3 robustRotation(const Mat3& F) {
+  Eigen::JacobiSVD<Mat3> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 U = svd.matrixU();
+  Mat3 V = svd.matrixV();
+  if (U.determinant() < 0) U.col(2) *= -1.0;  // singular values are sorted: column 2 is the smallest
+  if (V.determinant() < 0) V.col(2) *= -1.0;
+  return U * V.transpose();
+}
+
+int countInverted(const Points& P, const Tets& tets) {
+  std::atomic<int> count{0};
+  parallelFor(std::size_t(tets.rows()), [&](std::size_t b, std::size_t e) {
+    int local = 0;
+    for (std::size_t t = b; t < e; ++t) {
+      const auto T = tets.row(Eigen::Index(t));
+      if (tetVolume(node(P, T[0]), node(P, T[1]), node(P, T[2]), node(P, T[3])) <= 0.0) ++local;
+    }
+    count += local;
+  });
+  return count.load();
+}
+
+/// Per-tet rest data: shape-function gradients g_a (rows) and rest volume.
+struct RestTet {
+  Eigen::Matrix<double, 4, 3> g;
+  Mat3 DmInv;
+  double volume;
+};
+
+/// Jacobi-preconditioned CG on a full symmetric column-major matrix, threaded with parallelFor
+/// (Eigen's CG is single-threaded without OpenMP). Stops at |b - Ax| <= tol |b|, as Eigen's does.
+/// Returns the iteration count; relResidual gets |r| / |b|.
+int jacobiCg(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tol, int maxIter,
+             double& relResidual) {
+  const Eigen::Index n = A.rows();
+  constexpr std::size_t chunks = 64;
+  std::vector<double> part1(chunks), part2(chunks);
+  // Small systems run on the calling thread: spawning threads per CG step would dominate.
+  const std::size_t grain = n < 30000 ? chunks : 1;
+  const auto range = [&](std::size_t c) {
+    return std::pair<Eigen::Index, Eigen::Index>(Eigen::Index(c) * n / Eigen::Index(chunks),
+                                                 Eigen::Index(c + 1) * n / Eigen::Index(chunks));
+  };
+  // Runs f(begin, end) over the chunks and returns the sums of the two partials it writes.
+  const auto reduce = [&](const std::function<void(Eigen::Index, Eigen::Index, double&, double&)>& f) {
+    parallelFor(chunks, [&](std::size_t cb, std::size_t ce) {
+      for (std::size_t c = cb; c < ce; ++c) {
+        const auto [lo, hi] = range(c);
+        part1[c] = part2[c] = 0.0;
+        f(lo, hi, part1[c], part2[c]);
+      }
+    }, grain);
+    double s1 = 0, s2 = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      s1 += part1[c];
+      s2 += part2[c];
+    }
+    return std::pair<double, double>(s1, s2);
+  };
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  const double* val = A.valuePtr();
+  Eigen::VectorXd invDiag(n), r(n), z(n), p(n), q(n);
+  // y = A v over [lo, hi): column i of the symmetric matrix is row i.
+  const auto matvec = [&](const Eigen::VectorXd& v, Eigen::VectorXd& y, Eigen::Index lo, Eigen::Index hi) {
+    for (Eigen::Index i = lo; i < hi; ++i) {
+      double s = 0;
+      for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * v[inner[k]];
+      y[i] = s;
+    }
+  };
+  auto [bb, rr] = reduce([&](Eigen::Index lo, Eigen::Index hi, double& s1, double& s2) {
+    matvec(x, q, lo, hi);
+    for (Eigen::Index i = lo; i < hi; ++i) {
+      double d = 0;
+      for (int k = outer[i]; k < outer[i + 1]; ++k)
+        if (inner[k] == i) d = val[k];
+      invDiag[i] = d != 0.0 ? 1.0 / d : 1.0;
+      r[i] = b[i] - q[i];
+      s1 += b[i] * b[i];
+      s2 += r[i] * r[i];
+    }
+  });
+  if (bb == 0.0) {
+    x.setZero();
+    relResidual = 0.0;
+    return 0;
+  }
+  const double threshold = tol * tol * bb;
+  if (rr <= threshold) {
+    relResidual = std::sqrt(rr / bb);
+    return 0;
+  }
+  double rz = reduce([&](Eigen::Index lo, Eigen::Index hi, double& s1, double&) {
+                for (Eigen::Index i = lo; i < hi; ++i) {
+                  p[i] = invDiag[i] * r[i];
+                  s1 += r[i] * p[i];
+                }
+              }).first;
+  int it = 0;
+  while (it < maxIter) {
+    const double pq = reduce([&](Eigen::Index lo, Eigen::Index hi, double& s1, double&) {
+                        matvec(p, q, lo, hi);
+                        for (Eigen::Index i = lo; i < hi; ++i) s1 += p[i] * q[i];
+                      }).first;
+    const double alpha = rz / pq;
+    const auto [rzNew, rNorm] = reduce([&](Eigen::Index lo, Eigen::Index hi, double& s1, double& s2) {
+      for (Eigen::Index i = lo; i < hi; ++i) {
+        x[i] += alpha * p[i];
+        r[i] -= alpha * q[i];
+        z[i] = invDiag[i] * r[i];
+        s1 += r[i] * z[i];
+        s2 += r[i] * r[i];
+      }
+    });
+    ++it;
+    rr = rNorm;
+    if (rr <= threshold) break;
+    const double beta = rzNew / rz;
+    rz = rzNew;
+    parallelFor(chunks, [&](std::size_t cb, std::size_t ce) {
+      for (std::size_t c = cb; c < ce; ++c) {
+        const auto [lo, hi] = range(c);
+        for (Eigen::Index i = lo; i < hi; ++i) p[i] = z[i] + beta * p[i];
+      }
+    }, grain);
+  }
+  relResidual = std::sqrt(rr / bb);
+  return it;
+}
+
+}  // namespace
+
+void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
+                       Points& posed, const CorotationalOptions& options, CorotationalReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  const Eigen::Index nV = rest.rows();
+  const Eigen::Index nT = tets.rows();
+  if (posed.rows() != nV)
+    throw std::invalid_argument("relaxCorotational: posed has " + std::to_string(posed.rows()) +
+                                " nodes but rest has " + std::to_string(nV));
+  if (Eigen::Index(fixedBone.size()) != nV)
+    throw std::invalid_argument("relaxCorotational: fixedBone has " + std::to_string(fixedBone.size()) +
+                                " entries but the mesh has " + std::to_string(nV) + " nodes");
+  if (!(options.poisson > -1.0 && options.poisson < 0.5))
+    throw std::invalid_argument("relaxCorotational: Poisson's ratio must be in (-1, 0.5), got " +
+                                std::to_string(options.poisson));
+  if (!(options.young > 0.0) || !std::isfinite(options.young))
+    throw std::invalid_argument("relaxCorotational: Young's modulus must be positive");
+  if (options.outerIterations < 1)
+    throw std::invalid_argument("relaxCorotational: outerIterations must be >= 1");
+  if (!(options.tolerance > 0.0))
+    throw std::invalid_argument("relaxCorotational: tolerance must be positive");
+  if (options.maxCgIterations < 1)
+    throw std::invalid_argument("relaxCorotational: maxCgIterations must be >= 1");
+  for (Eigen::Index t = 0; t < nT; ++t)
+    for (int a = 0; a < 4; ++a)
+      if (tets(t, a) < 0 || tets(t, a) >= nV)
+        throw std::invalid_argument("relaxCorotational: tet " + std::to_string(t) +
+                                    " has node index " + std::to_string(tets(t, a)) +
+                                    " outside [0, " + std::to_string(nV) + ")");
+  const bool anyFixed = std::any_of(fixedBone.begin(), fixedBone.end(), [](int b) { return b >= 0; });
+  if (nV > 0 && !anyFixed)
+    throw std::invalid_argument(
+        "relaxCorotational: no node is fixed; the elastic system is singular (mark bone nodes "
+        "with fixedBone >= 0)");
+
+  CorotationalReport local;
+  CorotationalReport& rep = report ? *report : local;
+  rep = CorotationalReport{};
+  rep.invertedBefore = countInverted(posed, tets);
+
+  // Unknowns: free nodes that belong to at least one tet (a node in no tet has no stiffness).
+  std::vector<int> dof(std::size_t(nV), -1);
+  for (Eigen::Index t = 0; t < nT; ++t)
+    for (int a = 0; a < 4; ++a)
+      if (fixedBone[std::size_t(tets(t, a))] < 0) dof[std::size_t(tets(t, a))] = 0;
+  std::vector<int> freeNodes;
+  for (Eigen::Index i = 0; i < nV; ++i)
+    if (dof[std::size_t(i)] == 0) {
+      dof[std::size_t(i)] = int(freeNodes.size());
+      freeNodes.push_back(int(i));
+    }
+  const std::size_t nFree = freeNodes.size();
+
+  // Rest data per tet (shape-function gradients and volume); rest tets must be positive.
+  std::vector<RestTet> restTets(static_cast<std::size_t>(nT));
+  std::atomic<long long> badTet{-1};
+  parallelFor(std::size_t(nT), [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      const auto T = tets.row(Eigen::Index(t));
+      Mat3 Dm;
+      const Vec3 x0 = node(rest, T[0]);
+      for (int k = 0; k < 3; ++k) Dm.col(k) = node(rest, T[k + 1]) - x0;
+      const double det = Dm.determinant();
+      RestTet& r = restTets[t];
+      r.volume = det / 6.0;
+      const double scale = Dm.colwise().norm().maxCoeff();
+      if (!(det > 1e-12 * scale * scale * scale)) {
+        badTet = (long long)t;
+        continue;
+      }
+      r.DmInv = Dm.inverse();
+      r.g.bottomRows<3>() = r.DmInv;  // row k of Dm^-1 is the gradient of N_{k+1}
+      r.g.row(0) = -r.DmInv.colwise().sum();
+    }
+  });
+  if (badTet >= 0)
+    throw std::invalid_argument("relaxCorotational: rest tet " + std::to_string(badTet.load()) +
+                                " is degenerate or inverted (rest volume must be > 0)");
+
+  if (nFree == 0) {
+    rep.invertedAfter = rep.invertedBefore;
+    rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return;
+  }
+
+  // Node -> incident (tet, local index) lists, for free nodes only (CSR).
+  std::vector<int> incStart(nFree + 1, 0);
+  for (Eigen::Index t = 0; t < nT; ++t)
+    for (int a = 0; a < 4; ++a) {
+      const int d = dof[std::size_t(tets(t, a))];
+      if (d >= 0 && fixedBone[std::size_t(tets(t, a))] < 0) ++incStart[std::size_t(d) + 1];
+    }
+  for (std::size_t i = 0; i < nFree; ++i) incStart[i + 1] += incStart[i];
+  std::vector<int> incTet(static_cast<std::size_t>(incStart[nFree]));
+  {
+    std::vector<int> fill(incStart);  // next write position per free node
+    for (Eigen::Index t = 0; t < nT; ++t)
+      for (int a = 0; a < 4; ++a) {
+        const int v = tets(t, a);
+        if (fixedBone[std::size_t(v)] < 0) incTet[std::size_t(fill[std::size_t(dof[std::size_t(v)])]++)] = int(t) * 4 + a;
+      }
+  }
+
+  // Block sparsity pattern: row i holds its free neighbours (and itself), sorted.
+  std::vector<int> rowStart(nFree + 1, 0);
+  std::vector<std::vector<int>> rowCols;
+  rowCols.resize(nFree);
+  parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      std::vector<int>& cols = rowCols[i];
+      for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
+        const int t = incTet[std::size_t(k)] / 4;
+        for (int c = 0; c < 4; ++c) {
+          const int v = tets(t, c);
+          if (fixedBone[std::size_t(v)] < 0) cols.push_back(dof[std::size_t(v)]);
+        }
+      }
+      std::sort(cols.begin(), cols.end());
+      cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+    }
+  });
+  for (std::size_t i = 0; i < nFree; ++i) rowStart[i + 1] = rowStart[i] + int(rowCols[i].size());
+  const Eigen::Index n = Eigen::Index(3 * nFree);
+  // Symmetric, so the column-major arrays are filled row by row: column 3i+c holds row 3i+c.
+  SpMat A(n, n);
+  A.resizeNonZeros(Eigen::Index(9) * rowStart[nFree]);
+  for (std::size_t i = 0; i < nFree; ++i)
+    for (int c = 0; c < 3; ++c) A.outerIndexPtr()[3 * i + c] = 9 * rowStart[i] + 3 * c * int(rowCols[i].size());
+  A.outerIndexPtr()[n] = 9 * rowStart[nFree];
+  parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const std::vector<int>& cols = rowCols[i];
+      for (int c = 0; c < 3; ++c) {
+        int* inner = A.innerIndexPtr() + A.outerIndexPtr()[3 * i + c];
+        for (std::size_t k = 0; k < cols.size(); ++k)
+          for (int d = 0; d < 3; ++d) inner[3 * k + std::size_t(d)] = 3 * cols[k] + d;
+      }
+    }
+  });
+  rowCols.clear();
+  rowCols.shrink_to_fit();
+
+  const double nu = options.poisson, E = options.young;
+  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double mu = E / (2.0 * (1.0 + nu));
+
+  std::vector<Mat3> rotation(static_cast<std::size_t>(nT));
+  Eigen::VectorXd rhs(n), x(n);
+  for (int outer = 0; outer < options.outerIterations; ++outer) {
+    const auto assemblyStart = std::chrono::steady_clock::now();
+    // Element rotations from the current pose.
+    parallelFor(std::size_t(nT), [&](std::size_t b, std::size_t e) {
+      for (std::size_t t = b; t < e; ++t) {
+        const auto T = tets.row(Eigen::Index(t));
+        Mat3 Ds;
+        const Vec3 x0 = node(posed, T[0]);
+        for (int k = 0; k < 3; ++k) Ds.col(k) = node(posed, T[k + 1]) - x0;
+        rotation[t] = robustRotation(Ds * restTets[t].DmInv);
+      }
+    });
+    // Row-wise assembly (no write conflicts): for free node i = local a of tet t, the blocks
+    // K'_ab = R K_ab R^T with K_ab = V (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a.g_b) I), and
+    // rhs_i = sum_t R sum_b K_ab x0_b  -  sum_{b fixed} K'_ab x_b.
+    double* values = A.valuePtr();
+    const int* inner = A.innerIndexPtr();
+    const int* outerIdx = A.outerIndexPtr();
+    parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        const int rowLen = (outerIdx[3 * i + 1] - outerIdx[3 * i]) / 3;  // blocks in the row
+        const int* cols = inner + outerIdx[3 * i];                       // scalar columns of row 3i
+        double* v0 = values + outerIdx[3 * i];
+        std::fill(v0, v0 + 9 * rowLen, 0.0);
+        Vec3 r = Vec3::Zero();
+        for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
+          const int t = incTet[std::size_t(k)] / 4, a = incTet[std::size_t(k)] % 4;
+          const RestTet& rt = restTets[std::size_t(t)];
+          const Mat3& R = rotation[std::size_t(t)];
+          const Vec3 ga = rt.g.row(a).transpose();
+          const Vec3 xr0 = node(rest, tets(t, 0));
+          Vec3 restForce = Vec3::Zero();
+          for (int bb = 0; bb < 4; ++bb) {
+            const Vec3 gb = rt.g.row(bb).transpose();
+            const Mat3 Kab = rt.volume * (lambda * ga * gb.transpose() + mu * gb * ga.transpose() +
+                                          mu * ga.dot(gb) * Mat3::Identity());
+            restForce += Kab * (node(rest, tets(t, bb)) - xr0);  // K annihilates translations
+            const Mat3 block = R * Kab * R.transpose();
+            const int v = tets(t, bb);
+            if (fixedBone[std::size_t(v)] >= 0) {
+              r -= block * node(posed, v);
+            } else {
+              const int col = 3 * dof[std::size_t(v)];
+              const int* pos = std::lower_bound(cols, cols + 3 * rowLen, col);
+              const std::size_t off = std::size_t(pos - cols);
+              for (int c = 0; c < 3; ++c) {
+                double* vc = v0 + 3 * c * rowLen + off;
+                for (int d = 0; d < 3; ++d) vc[d] += block(c, d);
+              }
+            }
+          }
+          r += R * restForce;
+        }
+        rhs.segment<3>(Eigen::Index(3 * i)) = r;
+        x.segment<3>(Eigen::Index(3 * i)) = node(posed, freeNodes[i]);
+      }
+    }, 256);
+
+    rep.assemblySeconds += seconds(assemblyStart);
+    const auto solveStart = std::chrono::steady_clock::now();
+    int iterations = 0;
+    double residual = 0.0;
+    if (options.preconditioner == CorotationalOptions::IncompleteCholesky) {
+      Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper,
+                               Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>
+          cg;
+      cg.setTolerance(options.tolerance);
+      cg.setMaxIterations(options.maxCgIterations);
+      cg.compute(A);
+      if (cg.preconditioner().info() != Eigen::Success)
+        throw std::runtime_error("relaxCorotational: incomplete Cholesky factorization failed");
+      x = cg.solveWithGuess(rhs, x);
+      iterations = int(cg.iterations());
+      residual = cg.error();
+    } else {
+      iterations = jacobiCg(A, rhs, x, options.tolerance, options.maxCgIterations, residual);
+    }
+    rep.solveSeconds += seconds(solveStart);
+    for (std::size_t i = 0; i < nFree; ++i)
+      posed.row(freeNodes[i]) = x.segment<3>(Eigen::Index(3 * i)).transpose();
+    rep.cgIterations.push_back(iterations);
+    rep.relativeResidual.push_back(residual);
+    rep.outerIterations = outer + 1;
+  }
+  rep.invertedAfter = countInverted(posed, tets);
+  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace repose
