@@ -151,9 +151,12 @@ const char* kPrepareUsage =
 
 const char* kPoseUsage =
     "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
+    "                   [--relax [--relax-iterations N] [--poisson NU]]\n"
     "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
-    "  volume's format; default: the format of the case's labels.\n";
+    "  volume's format; default: the format of the case's labels.\n"
+    "  --relax                 refine the skinned pose by a static corotational FEM solve (bones stay rigid,\n"
+    "                          soft tissue keeps its volume); --relax-iterations N (default 1), --poisson NU (0.49)\n";
 
 const char* kAnimateUsage =
     "usage: repose animate --case CASE_DIR --bvh FILE --out DIR [--map FILE] [--frames START:STOP:STEP]\n"
@@ -169,7 +172,8 @@ const char* kAnimateUsage =
     "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*)\n"
     "  --mode            direction (default): each bone points where the BVH bone points; relative:\n"
     "                    each joint's rotation relative to --reference-frame (default 0)\n"
-    "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n";
+    "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n"
+    "  --relax           corotational FEM relaxation of every frame (see repose pose --help)\n";
 
 void printTimings(const repose::Pipeline& pipeline, std::size_t from = 0) {
   const auto& t = pipeline.timings();
@@ -339,6 +343,18 @@ void writePosed(repose::Pipeline& pipeline, repose::AtomicOutputs& out, const st
   if (vtkImageData* image = pipeline.posedImage()) repose::writeImage(image, out.stage("posed_image" + imageExt));
 }
 
+void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
+  if (!o.has("relax")) {
+    if (o.has("relax-iterations") || o.has("poisson")) throw UsageError("--relax-iterations and --poisson need --relax");
+    return;
+  }
+  const double nu = o.number("poisson", 0.49);
+  const double iterations = o.number("relax-iterations", 1);
+  if (!(nu > -1 && nu < 0.5)) throw UsageError("--poisson must be in (-1, 0.5)");
+  if (iterations < 1 || iterations != std::floor(iterations)) throw UsageError("--relax-iterations must be a whole number >= 1");
+  pipeline.setRelaxation(true, nu, static_cast<int>(iterations));
+}
+
 int runPose(const Options& o) {
   if (o.help) return std::cout << kPoseUsage, 0;
   const std::string caseDir = o.require("case");
@@ -348,6 +364,7 @@ int runPose(const Options& o) {
   pipeline.loadCase(caseDir);
   pipeline.setPose(repose::readTextFile(posePath), posePath);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
+  applyRelaxation(pipeline, o);
   std::string imageExt = ".nii.gz";
   if (o.has("image")) {
     const std::string imagePath = o.get("image");
@@ -358,6 +375,7 @@ int runPose(const Options& o) {
   repose::AtomicOutputs out(outDir);
   writePosed(pipeline, out, labelsExt, imageExt);
   out.commit();
+  if (o.has("relax")) std::cout << pipeline.relaxationSummary() << "\n";
   std::cout << "posed outputs written to " << outDir << "\n";
   printTimings(pipeline);
   return 0;
@@ -413,6 +431,7 @@ int runAnimate(const Options& o) {
   repose::Pipeline pipeline;
   pipeline.loadCase(caseDir);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
+  applyRelaxation(pipeline, o);
   const repose::Skeleton skeleton = repose::parseSkeletonJson(pipeline.skeletonJson());
 
   repose::BvhMotion motion;
@@ -601,13 +620,15 @@ int main(int argc, char** argv) {
                                  "influences", "surface-reduction", "label-table", "max-gap"},
                                 none));
     if (command == "pose")
-      return runPose(Options(argc, argv, 2, {"case", "pose", "out", "skinning", "image", "format"}, none));
+      return runPose(Options(argc, argv, 2,
+                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "poisson"},
+                             {"relax"}));
     if (command == "rig") return runRig(Options(argc, argv, 2, {"labels", "label-table", "out", "max-gap"}, none));
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image"},
-                                {"volumes", "no-root-motion"}));
+                                 "unit-mm", "image", "relax-iterations", "poisson"},
+                                {"volumes", "no-root-motion", "relax"}));
     throw UsageError("unknown command '" + command + "' (see repose --help)");
   } catch (const UsageError& e) {
     std::cerr << "repose: error: " << e.what() << "\n";

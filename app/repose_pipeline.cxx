@@ -26,6 +26,7 @@
 #include <vtkXMLUnstructuredGridWriter.h>
 
 #include "vtkReposeBodyMesher.h"
+#include "vtkReposeCorotationalRelax.h"
 #include "vtkReposeBoneWeights.h"
 #include "vtkReposeImageReader.h"
 #include "vtkReposeImageWriter.h"
@@ -403,6 +404,7 @@ void Pipeline::connectPosing() {
   labelResampler_->SetInterpolationToNearest();
   labelResampler_->SetBackgroundValue(0);
   imageResampler_ = nullptr;
+  relax_ = nullptr;
 }
 
 void Pipeline::setPose(const std::string& poseJson, const std::string& poseName) {
@@ -471,7 +473,7 @@ void Pipeline::setRestImage(vtkImageData* image, const std::string& imageName) {
   imageResampler_ = vtkSmartPointer<vtkReposePosedVolume>::New();
   imageResampler_->SetInputData(0, restImage_);
   imageResampler_->SetInputData(1, restMesh_);
-  imageResampler_->SetInputConnection(2, skinning_->GetOutputPort());
+  imageResampler_->SetInputConnection(2, posedSource()->GetOutputPort());
   imageResampler_->SetInterpolationToLinear();
   // Air outside the body.
   double range[2];
@@ -488,8 +490,47 @@ void Pipeline::runStage(vtkAlgorithm* filter, const std::string& stage) {
   if (filter->GetOutputDataObject(0)->GetMTime() != before) timed(stage, secondsSince(t0));
 }
 
+vtkAlgorithm* Pipeline::posedSource() const {
+  if (relax_) return relax_;
+  return skinning_;
+}
+
+void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) {
+  if (!skinning_) throw std::runtime_error("no case loaded");
+  if (!(poisson > -1 && poisson < 0.5)) throw std::runtime_error("Poisson's ratio must be in (-1, 0.5)");
+  if (outerIterations < 1) throw std::runtime_error("relaxation needs at least one iteration");
+  if (enabled) {
+    if (!relax_) {
+      relax_ = vtkSmartPointer<vtkReposeCorotationalRelax>::New();
+      relax_->SetInputConnection(0, skinning_->GetOutputPort());
+      relax_->SetInputData(1, restMesh_);
+    }
+    relax_->SetPoissonRatio(poisson);
+    relax_->SetOuterIterations(outerIterations);
+  } else {
+    relax_ = nullptr;
+  }
+  vtkAlgorithmOutput* port = posedSource()->GetOutputPort();
+  deformer_->SetInputConnection(1, port);
+  labelResampler_->SetInputConnection(2, port);
+  if (imageResampler_) imageResampler_->SetInputConnection(2, port);
+}
+
+std::string Pipeline::relaxationSummary() const {
+  if (!relax_) return "";
+  std::ostringstream m;
+  m << "FEM relaxation: " << relax_->GetCGIterations() << " CG iterations, relative residual "
+    << relax_->GetRelativeResidual() << ", inverted tets " << relax_->GetInvertedBefore() << " -> "
+    << relax_->GetInvertedAfter() << ", " << relax_->GetLastRelaxTime() << " s";
+  return m.str();
+}
+
 vtkUnstructuredGrid* Pipeline::posedMesh() {
   runStage(skinning_, "skinning");
+  if (relax_) {
+    runStage(relax_, "FEM relaxation");
+    return relax_->GetOutput();
+  }
   return skinning_->GetOutput();
 }
 

@@ -14,6 +14,7 @@ class vtkImageData;
 class vtkPolyData;
 class vtkUnstructuredGrid;
 class vtkReposeBodyMesher;
+class vtkReposeCorotationalRelax;
 class vtkReposeBoneWeights;
 class vtkReposeSurfaceExtractor;
 class vtkReposeSurfaceBinding;
@@ -78,6 +79,11 @@ public:
   /// Sets an already validated pose (e.g. retargeted from motion capture).
   void setPose(const Pose& pose);
   void setSkinningMethod(const std::string& method);  ///< "dqs" | "lbs"
+  /// Corotational FEM relaxation of the skinned mesh (bone nodes stay rigid); everything posed
+  /// downstream (surfaces, volumes) then follows the relaxed mesh.
+  void setRelaxation(bool enabled, double poisson = 0.49, int outerIterations = 1);
+  /// One line on the last relaxation: CG iterations, residual, inverted tets before and after.
+  std::string relaxationSummary() const;
   /// Optional intensity image on the rest label grid, posed with trilinear sampling.
   void setRestImage(vtkImageData* image, const std::string& imageName);
 
@@ -115,6 +121,8 @@ private:
   vtkSmartPointer<vtkUnstructuredGrid> restMesh_;
   vtkSmartPointer<vtkPolyData> restSurfaces_;
   vtkSmartPointer<vtkReposeSkinning> skinning_;
+  vtkSmartPointer<vtkReposeCorotationalRelax> relax_;  // null when relaxation is off
+  vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;
   std::vector<StageTime> timings_;

@@ -295,7 +295,8 @@ TEST(CorotationalFem, DISABLED_BenchmarkBentBox) {
     repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt, &rep);
     std::printf("%s: %.2f s (assembly %.2f s, CG %.2f s), CG iterations %d, relative residual %.2e, inverted %d -> %d, "
                 "volume ratio skinned %.4f -> relaxed %.4f\n",
-                pre == CorotationalOptions::Jacobi ? "Jacobi" : "IncompleteCholesky", rep.seconds,
+                pre == CorotationalOptions::Jacobi ? "Jacobi" : "IncompleteCholesky",
+                rep.seconds,
                 rep.assemblySeconds, rep.solveSeconds,
                 rep.cgIterations[0], rep.relativeResidual[0], rep.invertedBefore, rep.invertedAfter,
                 repose::meshVolume(posed, b.tets) / restVolume,

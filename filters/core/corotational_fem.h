@@ -20,8 +20,8 @@ struct CorotationalOptions {
   /// CG stops when |K'x - f0| / |f0| <= tolerance.
   double tolerance = 1e-6;
   int maxCgIterations = 2000;
-  /// Jacobi: threaded CG (parallelFor). IncompleteCholesky: Eigen's CG with IncompleteCholesky
-  /// (AMD ordering), fewer iterations but serial factorization and triangular solves.
+  /// Eigen's ConjugateGradient with DiagonalPreconditioner (Jacobi) or IncompleteCholesky (AMD
+  /// ordering): fewer iterations, but the factorization and triangular solves cost more.
   enum Preconditioner { Jacobi, IncompleteCholesky };
   Preconditioner preconditioner = Jacobi;
 };

@@ -1,0 +1,136 @@
+#include "vtkReposeCorotationalRelax.h"
+
+#include "vtkCellArray.h"
+#include "vtkDataArray.h"
+#include "vtkIdList.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <exception>
+
+#include "corotational_fem.h"
+
+vtkStandardNewMacro(vtkReposeCorotationalRelax);
+
+namespace
+{
+repose::Points ToPoints(vtkPoints* points)
+{
+  repose::Points p(points->GetNumberOfPoints(), 3);
+  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i)
+  {
+    double x[3];
+    points->GetPoint(i, x);
+    p.row(i) << x[0], x[1], x[2];
+  }
+  return p;
+}
+}
+
+vtkReposeCorotationalRelax::vtkReposeCorotationalRelax()
+{
+  this->SetNumberOfInputPorts(2);
+}
+
+int vtkReposeCorotationalRelax::FillInputPortInformation(int port, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
+  (void)port;
+  return 1;
+}
+
+int vtkReposeCorotationalRelax::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkUnstructuredGrid* posed = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkUnstructuredGrid* rest = vtkUnstructuredGrid::GetData(inputVector[1]);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  if (!posed || !rest || !posed->GetPoints() || !rest->GetPoints())
+  {
+    vtkErrorMacro("needs the posed tet mesh (input 0) and the rest tet mesh (input 1)");
+    return 0;
+  }
+  vtkDataArray* fixed = rest->GetPointData()->GetArray("FixedBone");
+  if (!fixed || rest->GetNumberOfPoints() != posed->GetNumberOfPoints() ||
+    rest->GetNumberOfCells() != posed->GetNumberOfCells())
+  {
+    vtkErrorMacro("the rest mesh needs point data FixedBone and the same nodes and tets as the posed mesh");
+    return 0;
+  }
+  try
+  {
+    const vtkIdType nt = rest->GetNumberOfCells();
+    repose::Tets tets(nt, 4);
+    vtkNew<vtkIdList> ids;
+    for (vtkIdType c = 0; c < nt; ++c)
+    {
+      rest->GetCellPoints(c, ids);
+      if (ids->GetNumberOfIds() != 4)
+      {
+        vtkErrorMacro("cell " << c << " of the rest mesh is not a tetrahedron");
+        return 0;
+      }
+      for (int k = 0; k < 4; ++k)
+      {
+        tets(c, k) = static_cast<int>(ids->GetId(k));
+      }
+    }
+    std::vector<int> fixedBone(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
+    for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
+    {
+      fixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
+    }
+    const repose::Points restNodes = ToPoints(rest->GetPoints());
+    repose::Points nodes = ToPoints(posed->GetPoints());
+
+    repose::CorotationalOptions options;
+    options.poisson = this->PoissonRatio;
+    options.outerIterations = this->OuterIterations;
+    options.tolerance = this->Tolerance;
+    options.maxCgIterations = this->MaxIterations;
+    options.preconditioner = this->Preconditioner == 1 ? repose::CorotationalOptions::IncompleteCholesky
+                                                       : repose::CorotationalOptions::Jacobi;
+    repose::CorotationalReport report;
+    repose::relaxCorotational(restNodes, tets, fixedBone, nodes, options, &report);
+
+    output->ShallowCopy(posed);
+    vtkNew<vtkPoints> points;
+    points->SetDataType(posed->GetPoints()->GetDataType());
+    points->SetNumberOfPoints(nodes.rows());
+    for (vtkIdType v = 0; v < nodes.rows(); ++v)
+    {
+      points->SetPoint(v, nodes(v, 0), nodes(v, 1), nodes(v, 2));
+    }
+    output->SetPoints(points);
+    this->CGIterations = 0;
+    for (int it : report.cgIterations)
+    {
+      this->CGIterations += it;
+    }
+    this->RelativeResidual = report.relativeResidual.empty() ? 0.0 : report.relativeResidual.back();
+    this->InvertedBefore = report.invertedBefore;
+    this->InvertedAfter = report.invertedAfter;
+    this->LastRelaxTime = report.seconds;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  return 1;
+}
+
+void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "PoissonRatio: " << this->PoissonRatio << "\n";
+  os << indent << "OuterIterations: " << this->OuterIterations << "\n";
+  os << indent << "Tolerance: " << this->Tolerance << "\n";
+  os << indent << "MaxIterations: " << this->MaxIterations << "\n";
+  os << indent << "Preconditioner: " << (this->Preconditioner == 1 ? "IncompleteCholesky" : "Jacobi") << "\n";
+}
