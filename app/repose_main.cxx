@@ -32,6 +32,8 @@
 #include "vtkReposePhantomSource.h"
 
 #include "atomic_outputs.h"
+#include "deformation_stats.h"
+#include "fidelity_plot.h"
 #include "bvh.h"
 #include "pvd_series.h"
 #include "retarget.h"
@@ -151,12 +153,14 @@ const char* kPrepareUsage =
 
 const char* kPoseUsage =
     "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
-    "                   [--relax [--relax-iterations N] [--poisson NU]]\n"
+    "                   [--relax [--relax-iterations N] [--poisson NU]] [--compare lbs,dqs,dqs+fem]\n"
     "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels.\n"
     "  --relax                 refine the skinned pose by a static corotational FEM solve (bones stay rigid,\n"
-    "                          soft tissue keeps its volume); --relax-iterations N (default 1), --poisson NU (0.49)\n";
+    "                          soft tissue keeps its volume); --relax-iterations N (default 1), --poisson NU (0.49)\n"
+    "  --compare M,M,...       fidelity.csv and fidelity.png: body and per-label volume ratios, inverted tets and\n"
+    "                          |det F - 1| for each of lbs, dqs, lbs+fem, dqs+fem\n";
 
 const char* kAnimateUsage =
     "usage: repose animate --case CASE_DIR --bvh FILE --out DIR [--map FILE] [--frames START:STOP:STEP]\n"
@@ -173,7 +177,8 @@ const char* kAnimateUsage =
     "  --mode            direction (default): each bone points where the BVH bone points; relative:\n"
     "                    each joint's rotation relative to --reference-frame (default 0)\n"
     "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n"
-    "  --relax           corotational FEM relaxation of every frame (see repose pose --help)\n";
+    "  --relax           corotational FEM relaxation of every frame (see repose pose --help)\n"
+    "  --compare M,...   per frame and method (lbs, dqs, lbs+fem, dqs+fem): fidelity.csv and fidelity.png\n";
 
 void printTimings(const repose::Pipeline& pipeline, std::size_t from = 0) {
   const auto& t = pipeline.timings();
@@ -343,6 +348,61 @@ void writePosed(repose::Pipeline& pipeline, repose::AtomicOutputs& out, const st
   if (vtkImageData* image = pipeline.posedImage()) repose::writeImage(image, out.stage("posed_image" + imageExt));
 }
 
+/// The methods of --compare: "lbs", "dqs", "lbs+fem", "dqs+fem".
+std::vector<std::string> parseCompare(const Options& o) {
+  std::vector<std::string> methods;
+  if (!o.has("compare")) return methods;
+  std::stringstream in(o.get("compare"));
+  for (std::string m; std::getline(in, m, ',');) {
+    if (m != "lbs" && m != "dqs" && m != "lbs+fem" && m != "dqs+fem")
+      throw UsageError("--compare takes lbs, dqs, lbs+fem, dqs+fem (comma separated), not '" + m + "'");
+    methods.push_back(m);
+  }
+  if (methods.empty()) throw UsageError("--compare needs at least one method");
+  return methods;
+}
+
+/// Fidelity of every compared method at the current pose: one CSV row each, and the volume ratios
+/// for the plot. The pipeline's own method and relaxation are restored afterwards.
+struct FidelityReport {
+  std::vector<std::string> methods;
+  std::ostringstream rows;
+  std::vector<std::int32_t> labels;  // columns, fixed by the first row
+  std::map<std::string, std::vector<std::pair<double, double>>> series;
+
+  void addFrame(repose::Pipeline& pipeline, int frame, const std::string& userMethod, bool userRelax, double nu,
+                int iterations) {
+    for (const std::string& m : methods) {
+      pipeline.setSkinningMethod(m.substr(0, 3));
+      pipeline.setRelaxation(m.size() > 3, nu, iterations);
+      const repose::DeformationStats s = pipeline.posedStats();
+      if (labels.empty())
+        for (const auto& [label, ratio] : s.labelVolumeRatio) labels.push_back(label);
+      rows << frame << "," << m << "," << s.volumeRatio << "," << s.invertedTets << "," << s.meanAbsDetFMinus1 << ","
+           << s.maxAbsDetFMinus1;
+      for (auto label : labels) {
+        auto it = s.labelVolumeRatio.find(label);
+        rows << "," << (it == s.labelVolumeRatio.end() ? 0.0 : it->second);
+      }
+      rows << "\n";
+      series[m].push_back({double(frame), s.volumeRatio});
+    }
+    pipeline.setSkinningMethod(userMethod);
+    pipeline.setRelaxation(userRelax, nu, iterations);
+  }
+  void write(repose::AtomicOutputs& out) const {
+    std::ostringstream csv;
+    csv << "frame,method,body_volume_ratio,inverted_tets,mean_abs_detF_minus_1,max_abs_detF_minus_1";
+    for (auto label : labels) csv << ",label_" << label << "_volume_ratio";
+    csv << "\n" << rows.str();
+    repose::writeTextFile(out.stage("fidelity.csv"), csv.str());
+    repose::plotVolumeRatios(series, out.stage("fidelity.png"));
+  }
+};
+
+/// Charts need an X display: without one, run again under xvfb-run when it is installed.
+void requireDisplay(int argc, char** argv, const char* why);
+
 void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
   if (!o.has("relax")) {
     if (o.has("relax-iterations") || o.has("poisson")) throw UsageError("--relax-iterations and --poisson need --relax");
@@ -355,8 +415,9 @@ void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
   pipeline.setRelaxation(true, nu, static_cast<int>(iterations));
 }
 
-int runPose(const Options& o) {
+int runPose(const Options& o, int argc, char** argv) {
   if (o.help) return std::cout << kPoseUsage, 0;
+  if (o.has("compare")) requireDisplay(argc, argv, "fidelity.png");
   const std::string caseDir = o.require("case");
   const std::string posePath = o.require("pose");
   const std::string outDir = o.require("out");
@@ -372,8 +433,16 @@ int runPose(const Options& o) {
     imageExt = repose::imageExtension(imagePath);
   }
   const std::string labelsExt = o.has("format") ? normalizedFormat(o.get("format")) : pipeline.labelsExtension();
+  const std::vector<std::string> compare = parseCompare(o);
   repose::AtomicOutputs out(outDir);
   writePosed(pipeline, out, labelsExt, imageExt);
+  if (!compare.empty()) {
+    FidelityReport fidelity;
+    fidelity.methods = compare;
+    fidelity.addFrame(pipeline, 0, o.get("skinning", "dqs"), o.has("relax"), o.number("poisson", 0.49),
+                      int(o.number("relax-iterations", 1)));
+    fidelity.write(out);
+  }
   out.commit();
   if (o.has("relax")) std::cout << pipeline.relaxationSummary() << "\n";
   std::cout << "posed outputs written to " << outDir << "\n";
@@ -423,8 +492,9 @@ std::map<int, long> labelCounts(vtkImageData* labels) {
   return counts;
 }
 
-int runAnimate(const Options& o) {
+int runAnimate(const Options& o, int argc, char** argv) {
   if (o.help) return std::cout << kAnimateUsage, 0;
+  if (o.has("compare")) requireDisplay(argc, argv, "fidelity.png");
   const std::string caseDir = o.require("case");
   const std::string bvhPath = o.require("bvh");
   const std::string outDir = o.require("out");
@@ -459,6 +529,8 @@ int runAnimate(const Options& o) {
   }
   const FrameRange range = parseFrames(o.get("frames"), motion.frameCount);
   const bool volumes = o.has("volumes");
+  FidelityReport fidelity;
+  fidelity.methods = parseCompare(o);
   std::string imageExt;
   if (o.has("image")) {
     pipeline.setRestImage(repose::readIntensityImage(o.get("image")), o.get("image"));
@@ -479,8 +551,12 @@ int runAnimate(const Options& o) {
   double totalPosing = 0, worstPosing = 0;
   for (int f = range.start; f < range.stop; f += range.step) {
     char name[64];
-    const auto t0 = std::chrono::steady_clock::now();
     pipeline.setPose(retargeter->pose(f));
+    if (!fidelity.methods.empty())
+      fidelity.addFrame(pipeline, f, o.get("skinning", "dqs"), o.has("relax"), o.number("poisson", 0.49),
+                        int(o.number("relax-iterations", 1)));
+    // Posing time of the frame as the user asked for it (the comparison's methods are not counted).
+    const auto t0 = std::chrono::steady_clock::now();
     vtkUnstructuredGrid* mesh = pipeline.posedMesh();
     vtkPolyData* surfaces = pipeline.posedSurfaces();
     vtkImageData* labels = volumes ? pipeline.posedLabels() : nullptr;
@@ -515,6 +591,7 @@ int runAnimate(const Options& o) {
   }
   repose::writeTextFile(out.stage("animation.pvd"), repose::pvdText(entries));
   repose::writeTextFile(out.stage("frames.csv"), csv.str());
+  if (!fidelity.methods.empty()) fidelity.write(out);
   out.commit();
   std::cout << "animate: " << written << " frames of " << bvhPath << " written to " << outDir << " (posing "
             << std::fixed << std::setprecision(1) << 1e3 * totalPosing / std::max(written, 1) << " ms mean, "
@@ -537,13 +614,16 @@ bool reexecUnderXvfb(int argc, char** argv) {
   return false;
 }
 
+void requireDisplay(int argc, char** argv, const char* why) {
+  if (std::getenv("DISPLAY") || std::getenv("REPOSE_UNDER_XVFB")) return;
+  reexecUnderXvfb(argc, argv);
+  throw std::runtime_error(std::string(why) + " needs an X display: install xvfb (xvfb-run)");
+}
+
 int runDemo(const Options& o, int argc, char** argv) {
   if (o.help) return std::cout << kDemoUsage, 0;
   const bool render = !o.has("no-render");
-  if (render && !std::getenv("DISPLAY") && !std::getenv("REPOSE_UNDER_XVFB")) {
-    reexecUnderXvfb(argc, argv);
-    throw std::runtime_error("render.png needs an X display: install xvfb (xvfb-run) or pass --no-render");
-  }
+  if (render) requireDisplay(argc, argv, "render.png (or pass --no-render)");
   const std::string outDir = o.get("out", "repose-demo");
   const std::string size = o.get("size", "small");
   repose::Pipeline pipeline;
@@ -621,14 +701,17 @@ int main(int argc, char** argv) {
                                 none));
     if (command == "pose")
       return runPose(Options(argc, argv, 2,
-                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "poisson"},
-                             {"relax"}));
+                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "poisson",
+                              "compare"},
+                             {"relax"}),
+                     argc, argv);
     if (command == "rig") return runRig(Options(argc, argv, 2, {"labels", "label-table", "out", "max-gap"}, none));
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image", "relax-iterations", "poisson"},
-                                {"volumes", "no-root-motion", "relax"}));
+                                 "unit-mm", "image", "relax-iterations", "poisson", "compare"},
+                                {"volumes", "no-root-motion", "relax"}),
+                        argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");
   } catch (const UsageError& e) {
     std::cerr << "repose: error: " << e.what() << "\n";

@@ -10,6 +10,7 @@
 
 #include <vtkAlgorithm.h>
 #include <vtkCommand.h>
+#include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkExecutive.h>
 #include <vtkIdList.h>
@@ -39,6 +40,7 @@
 #include "atomic_outputs.h"
 #include "pose.h"
 #include "skeleton.h"
+#include "deformation_stats.h"
 #include "tet_mesh.h"
 
 namespace repose {
@@ -447,6 +449,26 @@ double Pipeline::restMeshVolume() {
     }
   }
   return signedVolume(restMesh_->GetPoints(), tets_);
+}
+
+DeformationStats Pipeline::posedStats() {
+  restMeshVolume();  // caches the connectivity
+  if (tetLabels_.size() != std::size_t(tets_.rows())) {
+    tetLabels_.assign(std::size_t(tets_.rows()), 0);
+    if (vtkDataArray* labels = restMesh_->GetCellData()->GetArray("Label"))
+      for (vtkIdType c = 0; c < labels->GetNumberOfTuples() && c < tets_.rows(); ++c)
+        tetLabels_[std::size_t(c)] = static_cast<std::int32_t>(labels->GetTuple1(c));
+  }
+  auto toPoints = [](vtkPoints* points) {
+    Points p(points->GetNumberOfPoints(), 3);
+    for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
+      double x[3];
+      points->GetPoint(i, x);
+      p.row(i) << x[0], x[1], x[2];
+    }
+    return p;
+  };
+  return deformationStats(toPoints(restMesh_->GetPoints()), toPoints(posedMesh()->GetPoints()), tets_, tetLabels_);
 }
 
 double Pipeline::posedMeshVolume() {

@@ -25,6 +25,7 @@ class vtkReposePosedVolume;
 namespace repose {
 
 struct Pose;
+struct DeformationStats;
 
 struct PrepareSettings {
   double bodyThreshold = -500.0;   ///< HU, with a CT image
@@ -95,6 +96,8 @@ public:
   /// Signed volume of the rest and of the posed tet mesh (mm^3).
   double restMeshVolume();
   double posedMeshVolume();
+  /// Volume fidelity of the current posed mesh against the rest mesh (per tet label too).
+  DeformationStats posedStats();
   /// Seconds of the last skinning run alone (the interactive cost).
   double lastSkinningSeconds() const;
 
@@ -127,6 +130,7 @@ private:
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;
   std::vector<StageTime> timings_;
   Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> tets_;  // rest mesh connectivity, for volumes
+  std::vector<std::int32_t> tetLabels_;
   std::vector<std::string> report_;
 };
 

@@ -52,5 +52,17 @@ v0, vl, vf = volume(rest), volume(skinned), volume(relaxed)
 print(f"mesh volume ratio: LBS {vl / v0:.5f}, LBS+FEM {vf / v0:.5f}")
 check(abs(vf / v0 - 1) <= abs(vl / v0 - 1) + 1e-4, f"FEM keeps the volume at least as well as LBS "
       f"({vf / v0:.5f} vs {vl / v0:.5f})", failures)
-print(f"{6 - len(failures)} passed, {len(failures)} failed")
+# The fidelity report: one row per method, and its plot.
+run("pose", "--case", f"{TINY}/case", "--pose", pose, "--compare", "lbs,dqs,dqs+fem", "--out", f"{out}/compare")
+import csv
+rows = list(csv.DictReader(open(f"{out}/compare/fidelity.csv")))
+check([r["method"] for r in rows] == ["lbs", "dqs", "dqs+fem"] and os.path.getsize(f"{out}/compare/fidelity.png") > 1000,
+      "fidelity.csv has a row per method and fidelity.png is drawn", failures)
+by = {r["method"]: r for r in rows}
+check(abs(float(by["lbs"]["body_volume_ratio"]) - vl / v0) < 1e-6,
+      "fidelity.csv's LBS volume ratio matches the posed mesh", failures)
+check(float(by["dqs+fem"]["mean_abs_detF_minus_1"]) < float(by["dqs"]["mean_abs_detF_minus_1"]),
+      f"FEM lowers the mean |det F - 1| ({by['dqs']['mean_abs_detF_minus_1']} -> {by['dqs+fem']['mean_abs_detF_minus_1']})",
+      failures)
+print(f"{9 - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)
