@@ -785,6 +785,24 @@ std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
   return best;
 }
 
+// Both passes, then (with extrapolation) detached fragments dropped and pinholes closed with
+// `combine` of the neighbours (most common label, or mean intensity).
+template <class T, class Kernel, class Combine>
+void resamplePasses(const Prepared& pr, const Tets& tets, const Kernel& kernel, Volume<T>& out, T background,
+                    Combine combine, PullResampleReport* report, std::chrono::steady_clock::time_point start) {
+  std::vector<std::uint8_t> marks;
+  const bool extrapolate = !pr.ext.offset.empty();
+  run(pr, tets, kernel, report, start, out.grid.voxelCount(), extrapolate ? &marks : nullptr);
+  if (!extrapolate) return;
+  const std::size_t dropped =
+      dropDetachedExtrapolation(out.data.data(), marks, pr.nx, pr.ny, pr.nz, kAttachReach, background);
+  const std::size_t filled = fillPinholes(out.data.data(), marks, pr.nx, pr.ny, pr.nz, combine);
+  if (report) {
+    report->extrapolatedVoxels = report->extrapolatedVoxels + filled - dropped;
+    report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+}
+
 }  // namespace
 
 MaskVolume restMeshCoverage(const ImageGrid& restGrid, const Points& restNodes, const Tets& tets) {
@@ -811,19 +829,8 @@ LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes,
                            rest.grid.dims[2], background,
                            options.restCoverage ? options.restCoverage->data.data() : nullptr,
                            rest.grid.spacing.maxCoeff()};
-  std::vector<std::uint8_t> marks;
-  const bool extrapolate = !pr.ext.offset.empty();
-  run(pr, tets, kernel, report, start, outGrid.voxelCount(), extrapolate ? &marks : nullptr);
-  if (extrapolate) {
-    const std::size_t dropped = dropDetachedExtrapolation(out.data.data(), marks, pr.nx, pr.ny, pr.nz,
-                                                          kAttachReach, background);
-    const std::size_t filled = fillPinholes(out.data.data(), marks, pr.nx, pr.ny, pr.nz,
-                                            [background](const std::int32_t* v, int n) { return mostCommon(v, n, background); });
-    if (report) {
-      report->extrapolatedVoxels = report->extrapolatedVoxels + filled - dropped;
-      report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
-  }
+  resamplePasses(pr, tets, kernel, out, background,
+                 [background](const std::int32_t* v, int n) { return mostCommon(v, n, background); }, report, start);
   return out;
 }
 
@@ -847,22 +854,13 @@ IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points&
                                rest.grid.dims[2], background,
                                options.restCoverage ? options.restCoverage->data.data() : nullptr,
                                rest.grid.spacing.maxCoeff()};
-  std::vector<std::uint8_t> marks;
-  const bool extrapolate = !pr.ext.offset.empty();
-  run(pr, tets, kernel, report, start, outGrid.voxelCount(), extrapolate ? &marks : nullptr);
-  if (extrapolate) {
-    const std::size_t dropped = dropDetachedExtrapolation(out.data.data(), marks, pr.nx, pr.ny, pr.nz,
-                                                          kAttachReach, background);
-    const std::size_t filled = fillPinholes(out.data.data(), marks, pr.nx, pr.ny, pr.nz, [](const float* v, int n) {
-      double sum = 0;
-      for (int a = 0; a < n; ++a) sum += v[a];
-      return float(sum / n);
-    });
-    if (report) {
-      report->extrapolatedVoxels = report->extrapolatedVoxels + filled - dropped;
-      report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
-  }
+  resamplePasses(pr, tets, kernel, out, background,
+                 [](const float* v, int n) {
+                   double sum = 0;
+                   for (int i = 0; i < n; ++i) sum += v[i];
+                   return float(sum / n);
+                 },
+                 report, start);
   return out;
 }
 
