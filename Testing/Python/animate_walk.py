@@ -8,10 +8,8 @@ import sys
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
-from repose_testing import SHARED, TEMP, TINY, check, load_json, run
+from repose_testing import SHARED, TEMP, TINY, Mesh, check, kabsch, load_json, run
 
 failures = []
 out = os.path.join(TEMP, "animate_walk")
@@ -34,29 +32,16 @@ joints = {j["name"]: j for j in skeleton["joints"]}
 index = {j["name"]: i for i, j in enumerate(skeleton["joints"])}
 
 
-def read(path):
-    r = vtkXMLUnstructuredGridReader()
-    r.SetFileName(path)
-    r.Update()
-    g = r.GetOutput()
-    pts = vtk_to_numpy(g.GetPoints().GetData()).astype(float)
-    cells = vtk_to_numpy(g.GetCells().GetConnectivityArray()).reshape(-1, 4)
-    return g, pts, cells
-
-
-rest_grid, rest, tets = read(f"{TINY}/case/mesh.vtu")
-fixed = vtk_to_numpy(rest_grid.GetPointData().GetArray("FixedBone"))
+rest_mesh = Mesh(f"{TINY}/case/mesh.vtu")
+rest, tets = rest_mesh.points, rest_mesh.tets
+fixed = rest_mesh.point_array("FixedBone")
 
 
 def rigid(name, posed):
     """Kabsch fit of a bone's fixed nodes: rotation, translation and the worst residual."""
     sel = fixed == index[name]
-    a, b = rest[sel], posed[sel]
-    ca, cb = a.mean(0), b.mean(0)
-    u, _, vt = np.linalg.svd((a - ca).T @ (b - cb))
-    d = np.sign(np.linalg.det(vt.T @ u.T))
-    R = vt.T @ np.diag([1, 1, d]) @ u.T
-    return R, cb - R @ ca, np.abs((a - ca) @ R.T + cb - b).max()
+    G, residual = kabsch(rest[sel], posed[sel])
+    return G[:3, :3], G[:3, 3], residual
 
 
 def direction(name, child, posed):
@@ -68,7 +53,7 @@ def direction(name, child, posed):
 swing = {"left_hip": [], "right_hip": [], "left_shoulder": [], "right_shoulder": []}
 knee, worst_rigid, inverted = [], 0.0, 0
 for f in files[0::2]:
-    _, posed, _ = read(os.path.join(out, f))
+    posed = Mesh(os.path.join(out, f)).points
     for name in swing:
         child = name.replace("hip", "knee").replace("shoulder", "elbow")
         swing[name].append(-direction(name, child, posed)[1])  # anterior component (LPS: -y)

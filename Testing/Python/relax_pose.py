@@ -7,10 +7,8 @@ import shutil
 import sys
 
 import numpy as np
-from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
-from repose_testing import TEMP, TESTING, TINY, check, run
+from repose_testing import TEMP, TESTING, TINY, Mesh, check, run
 
 failures = []
 out = os.path.join(TEMP, "relax")
@@ -25,19 +23,12 @@ check(residual <= 1e-6, f"CG converged: {iterations} iterations, relative residu
 check(after <= before, f"inverted tets {before} after skinning -> {after} after relaxation", failures)
 
 
-def read(path):
-    r = vtkXMLUnstructuredGridReader()
-    r.SetFileName(path)
-    r.Update()
-    g = r.GetOutput()
-    return g, vtk_to_numpy(g.GetPoints().GetData()).astype(float)
+rest_mesh = Mesh(f"{TINY}/case/mesh.vtu")
+rest, tets = rest_mesh.points, rest_mesh.tets
+fixed = rest_mesh.point_array("FixedBone") >= 0
+skinned = Mesh(f"{TINY}/posed_lbs/posed_mesh.vtu").points
+relaxed = Mesh(f"{out}/fem/posed_mesh.vtu").points
 
-
-rest_grid, rest = read(f"{TINY}/case/mesh.vtu")
-tets = vtk_to_numpy(rest_grid.GetCells().GetConnectivityArray()).reshape(-1, 4)
-fixed = vtk_to_numpy(rest_grid.GetPointData().GetArray("FixedBone")) >= 0
-_, skinned = read(f"{TINY}/posed_lbs/posed_mesh.vtu")
-_, relaxed = read(f"{out}/fem/posed_mesh.vtu")
 
 
 def volume(p):

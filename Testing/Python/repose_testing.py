@@ -159,3 +159,29 @@ def compare_with_baseline(png_path, name, threshold=10.0):
         shutil.copy(png_path, os.path.join(keep, name + ".png"))
         return False
     return True
+
+
+class Mesh:
+    """A tet mesh (.vtu): the VTK grid, node positions (float64, #V by 3) and tets (#T by 4)."""
+
+    def __init__(self, path):
+        from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+        r = vtkXMLUnstructuredGridReader()
+        r.SetFileName(path)
+        r.Update()
+        self.grid = r.GetOutput()
+        self.points = vtk_to_numpy(self.grid.GetPoints().GetData()).astype(float)
+        self.tets = vtk_to_numpy(self.grid.GetCells().GetConnectivityArray()).reshape(-1, 4)
+
+    def point_array(self, name):
+        return vtk_to_numpy(self.grid.GetPointData().GetArray(name))
+
+
+def kabsch(a, b):
+    """The rigid 4x4 transform best taking points a (N by 3) onto b, and the worst residual."""
+    ca, cb = a.mean(0), b.mean(0)
+    u, _, vt = np.linalg.svd((a - ca).T @ (b - cb))
+    R = vt.T @ np.diag([1, 1, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
+    G = np.eye(4)
+    G[:3, :3], G[:3, 3] = R, cb - R @ ca
+    return G, np.abs((a - ca) @ R.T + cb - b).max()

@@ -7,10 +7,8 @@ import sys
 
 import numpy as np
 from scipy import ndimage
-from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
-from repose_testing import (TESTING, TINY, Image, bone_transforms, check, load_json, rigid_bone_dice)
+from repose_testing import (TESTING, TINY, Image, Mesh, bone_transforms, check, load_json, rigid_bone_dice)
 
 failures = []
 skeleton = load_json(f"{TINY}/case/skeleton.json")
@@ -19,18 +17,10 @@ G = bone_transforms(skeleton, pose)
 names = [j["name"] for j in skeleton["joints"]]
 
 
-def read_mesh(path):
-    r = vtkXMLUnstructuredGridReader()
-    r.SetFileName(path)
-    r.Update()
-    return r.GetOutput()
-
-
-rest_mesh = read_mesh(f"{TINY}/case/mesh.vtu")
-pd = rest_mesh.GetPointData()
-W = vtk_to_numpy(pd.GetArray("Weights")).astype(float)
-B = vtk_to_numpy(pd.GetArray("BoneIds")).astype(int)
-fixed = vtk_to_numpy(pd.GetArray("FixedBone")).astype(int)
+rest_mesh = Mesh(f"{TINY}/case/mesh.vtu")
+W = rest_mesh.point_array("Weights").astype(float)
+B = rest_mesh.point_array("BoneIds").astype(int)
+fixed = rest_mesh.point_array("FixedBone").astype(int)
 check(np.abs(W.sum(1) - 1).max() <= 1e-6, f"weights sum to 1 (max error {np.abs(W.sum(1) - 1).max():.2e})", failures)
 check(W.min() >= 0 and W.max() <= 1, f"weights in [0,1] (min {W.min():.3g}, max {W.max():.3g})", failures)
 for j in range(len(names)):
@@ -39,9 +29,9 @@ fx = fixed >= 0
 top = B[np.arange(len(B)), W.argmax(1)]
 check(np.all(top[fx] == fixed[fx]) and np.all(W.max(1)[fx] > 1 - 1e-6), "fixed nodes carry weight 1 for their bone", failures)
 
-rest_pts = vtk_to_numpy(rest_mesh.GetPoints().GetData()).astype(float)
+rest_pts = rest_mesh.points
 for method in ("dqs", "lbs"):
-    posed_pts = vtk_to_numpy(read_mesh(f"{TINY}/posed_{method}/posed_mesh.vtu").GetPoints().GetData()).astype(float)
+    posed_pts = Mesh(f"{TINY}/posed_{method}/posed_mesh.vtu").points
     err = 0.0
     for j, n in enumerate(names):
         sel = fixed == j

@@ -8,10 +8,8 @@ import sys
 
 import numpy as np
 from scipy import ndimage
-from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
-from repose_testing import SHARED, TEMP, Image, check, load_json, rigid_bone_dice, run
+from repose_testing import SHARED, TEMP, Image, Mesh, check, kabsch, load_json, rigid_bone_dice, run
 
 failures = []
 work = os.path.join(TEMP, "totalseg_walk")
@@ -30,27 +28,10 @@ code, out, _ = run("animate", "--case", f"{work}/case", "--bvh", os.path.join(SH
 print(out)
 
 
-def read_mesh(path):
-    r = vtkXMLUnstructuredGridReader()
-    r.SetFileName(path)
-    r.Update()
-    return r.GetOutput()
-
-
-rest_mesh = read_mesh(f"{work}/case/mesh.vtu")
-rest_pts = vtk_to_numpy(rest_mesh.GetPoints().GetData()).astype(float)
-fixed = vtk_to_numpy(rest_mesh.GetPointData().GetArray("FixedBone"))
+rest_mesh = Mesh(f"{work}/case/mesh.vtu")
+rest_pts = rest_mesh.points
+fixed = rest_mesh.point_array("FixedBone")
 rest = Image(f"{work}/case/labels.nii.gz")
-
-
-def kabsch(a, b):
-    ca, cb = a.mean(0), b.mean(0)
-    u, _, vt = np.linalg.svd((a - ca).T @ (b - cb))
-    R = vt.T @ np.diag([1, 1, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
-    G = np.eye(4)
-    G[:3, :3], G[:3, 3] = R, cb - R @ ca
-    return G
-
 
 femur_ant = {"left_hip": [], "right_hip": []}
 worst = (1.0, "")
@@ -58,10 +39,10 @@ per_bone = {}
 pieces = []
 start, stop, step = map(int, frames.split(":"))
 for f in range(start, stop, step):
-    posed_pts = vtk_to_numpy(read_mesh(f"{work}/walk/frames/mesh_{f:05d}.vtu").GetPoints().GetData()).astype(float)
+    posed_pts = Mesh(f"{work}/walk/frames/mesh_{f:05d}.vtu").points
     posed = Image(f"{work}/walk/frames/labels_{f:05d}.nii.gz")
     for j, joint in enumerate(skeleton["joints"]):
-        G = kabsch(rest_pts[fixed == j], posed_pts[fixed == j])
+        G, _ = kabsch(rest_pts[fixed == j], posed_pts[fixed == j])
         d = rigid_bone_dice(rest, posed, joint["labels"], G)
         per_bone[joint["name"]] = min(per_bone.get(joint["name"], 1.0), d)
         if d < worst[0]:
