@@ -1,0 +1,124 @@
+#include "mesh_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <stdexcept>
+
+#include <vtkCellArray.h>
+#include <vtkOBJReader.h>
+#include <vtkOBJWriter.h>
+#include <vtkPLYReader.h>
+#include <vtkPLYWriter.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataReader.h>
+#include <vtkPolyDataWriter.h>
+#include <vtkSTLReader.h>
+#include <vtkSTLWriter.h>
+#include <vtkTriangleFilter.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLPolyDataWriter.h>
+
+namespace repose {
+namespace {
+
+std::string lowerExtension(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string ext = path.substr(dot);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+// VTK's readers print errors and return an empty mesh rather than failing: the caller checks the
+// result, so a truncated or foreign file gets one message of its own.
+template <class Reader>
+vtkSmartPointer<vtkPolyData> runReader(const std::string& path) {
+  auto reader = vtkSmartPointer<Reader>::New();
+  reader->SetFileName(path.c_str());
+  reader->GlobalWarningDisplayOff();
+  reader->Update();
+  auto mesh = vtkSmartPointer<vtkPolyData>::New();
+  if (reader->GetOutput()) mesh->ShallowCopy(reader->GetOutput());
+  return mesh;
+}
+
+}  // namespace
+
+bool isSurfaceMeshPath(const std::string& path) {
+  const std::string ext = lowerExtension(path);
+  return ext == ".obj" || ext == ".stl" || ext == ".ply" || ext == ".vtp" || ext == ".vtk";
+}
+
+vtkSmartPointer<vtkPolyData> readSurfaceMesh(const std::string& path) {
+  if (!std::ifstream(path).good()) throw std::runtime_error(path + ": no such file");
+  const std::string ext = lowerExtension(path);
+  vtkSmartPointer<vtkPolyData> mesh;
+  if (ext == ".obj")
+    mesh = runReader<vtkOBJReader>(path);
+  else if (ext == ".stl")
+    mesh = runReader<vtkSTLReader>(path);
+  else if (ext == ".ply")
+    mesh = runReader<vtkPLYReader>(path);
+  else if (ext == ".vtp")
+    mesh = runReader<vtkXMLPolyDataReader>(path);
+  else if (ext == ".vtk")
+    mesh = runReader<vtkPolyDataReader>(path);
+  else
+    throw std::runtime_error(path + ": unknown surface format (expected .obj, .stl, .ply, .vtp or .vtk)");
+  if (mesh->GetNumberOfPoints() == 0)
+    throw std::runtime_error(path + ": cannot read a surface mesh (no points)");
+  if (mesh->GetNumberOfPolys() + mesh->GetNumberOfStrips() == 0)
+    throw std::runtime_error(path + ": has no polygons (a surface mesh is needed)");
+  auto triangles = vtkSmartPointer<vtkTriangleFilter>::New();
+  triangles->SetInputData(mesh);
+  triangles->PassVertsOff();
+  triangles->PassLinesOff();
+  triangles->Update();
+  auto out = vtkSmartPointer<vtkPolyData>::New();
+  out->ShallowCopy(triangles->GetOutput());
+  return out;
+}
+
+void writeSurfaceMesh(vtkPolyData* mesh, const std::string& path) {
+  const std::string ext = lowerExtension(path);
+  int ok = 0;
+  if (ext == ".obj") {
+    auto w = vtkSmartPointer<vtkOBJWriter>::New();
+    w->SetFileName(path.c_str());
+    w->SetInputData(mesh);
+    ok = w->Write();
+  } else if (ext == ".stl") {
+    auto w = vtkSmartPointer<vtkSTLWriter>::New();
+    w->SetFileName(path.c_str());
+    w->SetInputData(mesh);
+    w->SetFileTypeToBinary();
+    ok = w->Write();
+  } else if (ext == ".ply") {
+    auto w = vtkSmartPointer<vtkPLYWriter>::New();
+    w->SetFileName(path.c_str());
+    w->SetInputData(mesh);
+    w->SetFileTypeToBinary();
+    ok = w->Write();
+  } else if (ext == ".vtp") {
+    auto w = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
+    w->SetFileName(path.c_str());
+    w->SetInputData(mesh);
+    w->SetDataModeToAppended();
+    w->EncodeAppendedDataOff();
+    ok = w->Write();
+  } else if (ext == ".vtk") {
+    auto w = vtkSmartPointer<vtkPolyDataWriter>::New();
+    w->SetFileName(path.c_str());
+    w->SetInputData(mesh);
+    w->SetFileTypeToBinary();
+    ok = w->Write();
+  } else {
+    throw std::runtime_error(path + ": unknown surface format (expected .obj, .stl, .ply, .vtp or .vtk)");
+  }
+  if (!ok) throw std::runtime_error(path + ": cannot write surface mesh");
+}
+
+}  // namespace repose
