@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <stdexcept>
 
 #include <vtkCellArray.h>
+#include <vtkDataArray.h>
+#include <vtkPoints.h>
 #include <vtkOBJReader.h>
 #include <vtkOBJWriter.h>
 #include <vtkPLYReader.h>
@@ -52,9 +55,11 @@ bool isSurfaceMeshPath(const std::string& path) {
   return ext == ".obj" || ext == ".stl" || ext == ".ply" || ext == ".vtp" || ext == ".vtk";
 }
 
-vtkSmartPointer<vtkPolyData> readSurfaceMesh(const std::string& path) {
-  if (!std::ifstream(path).good()) throw std::runtime_error(path + ": no such file");
+vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path) {
   const std::string ext = lowerExtension(path);
+  if (!isSurfaceMeshPath(path))
+    throw std::runtime_error(path + ": unknown mesh format '" + ext + "' (expected .obj, .stl, .ply, .vtp or .vtk)");
+  if (!std::ifstream(path).good()) throw std::runtime_error(path + ": no such file");
   vtkSmartPointer<vtkPolyData> mesh;
   if (ext == ".obj")
     mesh = runReader<vtkOBJReader>(path);
@@ -64,12 +69,20 @@ vtkSmartPointer<vtkPolyData> readSurfaceMesh(const std::string& path) {
     mesh = runReader<vtkPLYReader>(path);
   else if (ext == ".vtp")
     mesh = runReader<vtkXMLPolyDataReader>(path);
-  else if (ext == ".vtk")
-    mesh = runReader<vtkPolyDataReader>(path);
   else
-    throw std::runtime_error(path + ": unknown surface format (expected .obj, .stl, .ply, .vtp or .vtk)");
-  if (mesh->GetNumberOfPoints() == 0)
-    throw std::runtime_error(path + ": cannot read a surface mesh (no points)");
+    mesh = runReader<vtkPolyDataReader>(path);
+  if (mesh->GetNumberOfPoints() == 0) throw std::runtime_error(path + ": cannot read a mesh (no points)");
+  double range[2];
+  for (int c = 0; c < 3; ++c) {
+    mesh->GetPoints()->GetData()->GetRange(range, c);
+    if (!std::isfinite(range[0]) || !std::isfinite(range[1]))
+      throw std::runtime_error(path + ": non-finite vertex coordinates");
+  }
+  return mesh;
+}
+
+vtkSmartPointer<vtkPolyData> readSurfaceMesh(const std::string& path) {
+  vtkSmartPointer<vtkPolyData> mesh = readPolyData(path);
   if (mesh->GetNumberOfPolys() + mesh->GetNumberOfStrips() == 0)
     throw std::runtime_error(path + ": has no polygons (a surface mesh is needed)");
   auto triangles = vtkSmartPointer<vtkTriangleFilter>::New();

@@ -11,6 +11,10 @@ namespace repose {
 
 /// True when the extension names a surface format read and written here.
 bool isSurfaceMeshPath(const std::string& path);
+/// Reads a mesh keeping what it has: vertices, lines (polylines), polygons, strips, point and cell
+/// data; a point set without cells is accepted. Throws std::runtime_error "FILE: problem" (missing,
+/// unknown extension, unreadable, no points, non-finite coordinates).
+vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path);
 /// Reads a surface mesh (polygons are triangulated; points without polygons are an error).
 /// Throws std::runtime_error "FILE: problem" (missing, unknown extension, unreadable, no polygons).
 vtkSmartPointer<vtkPolyData> readSurfaceMesh(const std::string& path);

@@ -34,6 +34,10 @@
 #include "atomic_outputs.h"
 #include "deformation_stats.h"
 #include "fidelity_plot.h"
+#include "mesh_io.h"
+#include "mesh_posing.h"
+#include "ReposeImageConversion.h"
+#include "vdb_volume_writer.h"
 #include "bvh.h"
 #include "pvd_series.h"
 #include "retarget.h"
@@ -41,6 +45,7 @@
 #include "render_snapshot.h"
 #include "repose_pipeline.h"
 #include "skeleton.h"
+#include "voxelize_command.h"
 
 namespace {
 
@@ -73,6 +78,7 @@ public:
           value = argv[++i];
         }
         values_[name] = value;
+        lists_[name].push_back(value);
       } else {
         throw UsageError("unknown option --" + name);
       }
@@ -95,10 +101,16 @@ public:
     if (v.empty() || *end != '\0' || !std::isfinite(x)) throw UsageError("--" + n + " needs a number, not '" + v + "'");
     return x;
   }
+  /// Every value of a repeatable option, in order.
+  std::vector<std::string> all(const std::string& n) const {
+    auto it = lists_.find(n);
+    return it == lists_.end() ? std::vector<std::string>() : it->second;
+  }
   bool help = false;
 
 private:
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> lists_;
 };
 
 const char* kMainUsage =
@@ -110,7 +122,8 @@ const char* kMainUsage =
     "  prepare   mesh a label volume, compute bone weights and bind surfaces (once per scan)\n"
     "  pose      pose a prepared case: posed label volume, mesh and surfaces\n"
     "  animate   drive a prepared case with a BVH motion clip: a ParaView time series\n"
-    "  rig       find the joints from the bone labels and write an editable skeleton.json\n\n"
+    "  rig       find the joints from the bone labels and write an editable skeleton.json\n"
+    "  voxelize  surface meshes (skin, bones, tissues) -> a label volume and its label table\n\n"
     "Run 'repose COMMAND --help' for the options of a command.\n";
 
 const char* kDemoUsage =
@@ -153,10 +166,20 @@ const char* kPrepareUsage =
 
 const char* kPoseUsage =
     "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
-    "                   [--relax [--relax-iterations N] [--poisson NU]] [--compare lbs,dqs,dqs+fem]\n"
+    "                   [--mesh FILE ...] [--relax [--relax-iterations N] [--poisson NU]] [--compare lbs,dqs,dqs+fem]\n"
     "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels.\n"
+    "  --format vdb            OpenVDB instead (Houdini, Blender): DIR/posed_labels.vdb holds an Int32 grid 'labels'\n"
+    "                          (background 0) and a float fog grid 'label_<value>' per label; with --image,\n"
+    "                          DIR/posed_image.vdb holds a float grid 'ct'. Each grid's transform is the volume's\n"
+    "                          origin, spacing and direction (LPS millimetres)\n"
+    "  --mesh FILE             also pose this mesh (.obj, .stl, .ply, .vtp, .vtk; repeat for several): organs,\n"
+    "                          vessels, a catheter path (polylines and points too). Written as DIR/posed_<file name>\n"
+    "                          in its own format, point and cell data kept where the format holds them. Each vertex\n"
+    "                          is bound once to the rest tet mesh (vertices outside the body: the nearest tet,\n"
+    "                          extrapolated) and the binding is cached in CASE_DIR/bindings/, the only place pose\n"
+    "                          writes into a case (a read-only case is bound again on every run)\n"
     "  --relax                 refine the skinned pose by a static corotational FEM solve (bones stay rigid,\n"
     "                          soft tissue keeps its volume); --relax-iterations N (default 1), --poisson NU (0.49)\n"
     "  --compare M,M,...       fidelity.csv and fidelity.png: body and per-label volume ratios, inverted tets and\n"
@@ -165,7 +188,7 @@ const char* kPoseUsage =
 const char* kAnimateUsage =
     "usage: repose animate --case CASE_DIR --bvh FILE --out DIR [--map FILE] [--frames START:STOP:STEP]\n"
     "                      [--skinning dqs|lbs] [--volumes] [--image FILE] [--mode direction|relative]\n"
-    "                      [--reference-frame N]\n"
+    "                      [--reference-frame N] [--mesh FILE ...]\n"
     "                      [--no-root-motion] [--unit-mm MM]\n"
     "  Retargets every selected frame of the clip onto the case's skeleton and writes the posed mesh and\n"
     "  surfaces per frame (DIR/frames/), DIR/animation.pvd (open it in ParaView) and DIR/frames.csv (per\n"
@@ -178,6 +201,8 @@ const char* kAnimateUsage =
     "                    each joint's rotation relative to --reference-frame (default 0)\n"
     "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n"
     "  --relax           corotational FEM relaxation of every frame (see repose pose --help)\n"
+    "  --mesh FILE       also pose this mesh per frame (see repose pose --help; repeatable): DIR/frames/<name>_NNNNN.vtp,\n"
+    "                    one series per mesh in animation.pvd\n"
     "  --compare M,...   per frame and method (lbs, dqs, lbs+fem, dqs+fem): fidelity.csv and fidelity.png\n";
 
 void printTimings(const repose::Pipeline& pipeline, std::size_t from = 0) {
@@ -415,6 +440,71 @@ void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
   pipeline.setRelaxation(true, nu, static_cast<int>(iterations));
 }
 
+/// The --mesh files bound to the case's rest mesh (binding cache in CASE_DIR/bindings).
+std::unique_ptr<repose::MeshPoser> bindMeshes(repose::Pipeline& pipeline, const Options& o, const std::string& caseDir) {
+  const std::vector<std::string> paths = o.all("mesh");
+  if (paths.empty()) return nullptr;
+  std::set<std::string> names;
+  for (const auto& path : paths) {
+    if (!repose::isSurfaceMeshPath(path))
+      throw std::runtime_error(path + ": unknown mesh format (expected .obj, .stl, .ply, .vtp or .vtk)");
+    // Stems, not names: animate writes every mesh's frames as <stem>_NNNNN.vtp.
+    if (!names.insert(std::filesystem::path(path).stem().string()).second)
+      throw UsageError("two --mesh files are named " + std::filesystem::path(path).filename().string() +
+                       " (their outputs would collide)");
+  }
+  auto poser = std::make_unique<repose::MeshPoser>(pipeline.restMesh());
+  for (const auto& path : paths) {
+    const repose::PoseableMesh& m = poser->add(path, caseDir + "/bindings");
+    const vtkIdType n = m.rest->GetNumberOfPoints();
+    std::cout << "mesh " << path << ": " << n << " vertices, " << m.outside << " outside the body ("
+              << std::fixed << std::setprecision(1) << 100.0 * double(m.outside) / double(std::max<vtkIdType>(n, 1))
+              << " %), " << (m.fromCache ? "binding read from the cache" : "bound") << " in " << std::setprecision(3)
+              << m.bindSeconds << " s\n";
+    std::cout.unsetf(std::ios::floatfield);
+    if (!m.cacheWarning.empty()) std::cerr << "repose: warning: binding not cached: " << m.cacheWarning << "\n";
+  }
+  return poser;
+}
+
+void writePosedMeshes(repose::Pipeline& pipeline, const repose::MeshPoser& poser, repose::AtomicOutputs& out) {
+  for (std::size_t i = 0; i < poser.meshes().size(); ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    vtkSmartPointer<vtkPolyData> posed = poser.pose(i, pipeline.posedMesh());
+    const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const std::string name = repose::posedMeshName(poser.meshes()[i].path);
+    repose::writeSurfaceMesh(posed, out.stage(name));
+    std::cout << "mesh " << poser.meshes()[i].path << ": posed in " << std::fixed << std::setprecision(1) << ms
+              << " ms -> " << name << "\n";
+    std::cout.unsetf(std::ios::floatfield);
+  }
+}
+
+/// --format vdb: the posed label volume (and image) as sparse OpenVDB grids.
+void writePosedVdb(repose::Pipeline& pipeline, repose::AtomicOutputs& out, double imageBackground) {
+  auto describe = [](const std::string& name, const repose::VdbWriteReport& r, std::size_t voxels, std::size_t bytes) {
+    std::cout << "vdb " << name << ": " << r.grids << " grid(s), " << r.activeVoxels << " of " << voxels
+              << " voxels active (" << std::fixed << std::setprecision(1) << 100.0 * double(r.activeVoxels) / double(voxels)
+              << " %), " << double(r.memoryBytes) / 1e6 << " MB sparse vs " << double(bytes) / 1e6
+              << " MB dense, built in " << std::setprecision(3) << r.buildSeconds << " s, written in " << r.writeSeconds
+              << " s\n";
+    std::cout.unsetf(std::ios::floatfield);
+  };
+  repose::LabelVolume labels;
+  if (!repose_vtk::ToVolume(pipeline.posedLabels(), labels)) throw std::runtime_error("posed labels: not a volume");
+  const repose::VdbWriteReport r = repose::writeLabelsVdb(labels, out.stage("posed_labels.vdb"));
+  describe("posed_labels.vdb", r, labels.data.size(), labels.data.size() * sizeof(std::int32_t));
+  if (vtkImageData* image = pipeline.posedImage()) {
+    repose::IntensityVolume ct;
+    if (!repose_vtk::ToVolume(image, ct)) throw std::runtime_error("posed image: not a volume");
+    const repose::VdbWriteReport ri =
+        repose::writeIntensityVdb(ct, static_cast<float>(imageBackground), out.stage("posed_image.vdb"), "ct");
+    describe("posed_image.vdb", ri, ct.data.size(), ct.data.size() * sizeof(float));
+  }
+}
+
+bool isVdbFormat(const std::string& format) { return format == "vdb" || format == ".vdb"; }
+
 int runPose(const Options& o, int argc, char** argv) {
   if (o.help) return std::cout << kPoseUsage, 0;
   if (o.has("compare")) requireDisplay(argc, argv, "fidelity.png");
@@ -427,15 +517,30 @@ int runPose(const Options& o, int argc, char** argv) {
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
   applyRelaxation(pipeline, o);
   std::string imageExt = ".nii.gz";
+  double imageBackground = 0;
   if (o.has("image")) {
     const std::string imagePath = o.get("image");
-    pipeline.setRestImage(repose::readIntensityImage(imagePath), imagePath);
+    vtkSmartPointer<vtkImageData> image = repose::readIntensityImage(imagePath);
+    pipeline.setRestImage(image, imagePath);
     imageExt = repose::imageExtension(imagePath);
+    double range[2];
+    image->GetPointData()->GetScalars()->GetRange(range);
+    imageBackground = range[0];  // the posed image's air outside the body (see Pipeline::setRestImage)
   }
-  const std::string labelsExt = o.has("format") ? normalizedFormat(o.get("format")) : pipeline.labelsExtension();
+  const bool vdb = isVdbFormat(o.get("format"));
+  const std::string labelsExt =
+      vdb ? ".vdb" : o.has("format") ? normalizedFormat(o.get("format")) : pipeline.labelsExtension();
   const std::vector<std::string> compare = parseCompare(o);
+  std::unique_ptr<repose::MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
   repose::AtomicOutputs out(outDir);
-  writePosed(pipeline, out, labelsExt, imageExt);
+  if (vdb) {
+    repose::writeMesh(pipeline.posedMesh(), out.stage("posed_mesh.vtu"));
+    repose::writeSurfaces(pipeline.posedSurfaces(), out.stage("posed_surfaces.vtp"));
+    writePosedVdb(pipeline, out, imageBackground);
+  } else {
+    writePosed(pipeline, out, labelsExt, imageExt);
+  }
+  if (meshes) writePosedMeshes(pipeline, *meshes, out);
   if (!compare.empty()) {
     FidelityReport fidelity;
     fidelity.methods = compare;
@@ -537,6 +642,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
     imageExt = repose::imageExtension(o.get("image"));
   }
 
+  std::unique_ptr<repose::MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
   repose::AtomicOutputs out(outDir);
   repose::makeDirectories(out.stage("frames"));
   const double restVolume = pipeline.restMeshVolume();
@@ -571,6 +677,12 @@ int runAnimate(const Options& o, int argc, char** argv) {
     std::snprintf(name, sizeof(name), "frames/surfaces_%05d.vtp", f);
     repose::writeSurfaces(surfaces, out.stage(name));
     entries.push_back({time, 1, name});
+    for (std::size_t i = 0; meshes && i < meshes->meshes().size(); ++i) {
+      std::snprintf(name, sizeof(name), "_%05d.vtp", f);
+      const std::string file = "frames/" + std::filesystem::path(meshes->meshes()[i].path).stem().string() + name;
+      repose::writeSurfaces(meshes->pose(i, mesh), out.stage(file));
+      entries.push_back({time, int(2 + i), file});
+    }
     csv << f << "," << time << "," << pipeline.posedMeshVolume() / restVolume << "," << posing * 1e3;
     if (labels) {
       std::snprintf(name, sizeof(name), "frames/labels_%05d.nii.gz", f);
@@ -702,14 +814,21 @@ int main(int argc, char** argv) {
     if (command == "pose")
       return runPose(Options(argc, argv, 2,
                              {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "poisson",
-                              "compare"},
+                              "compare", "mesh"},
                              {"relax"}),
                      argc, argv);
+    if (command == "voxelize") {
+      try {
+        return repose::runVoxelizeCommand(argc, argv, 2);
+      } catch (const repose::VoxelizeUsageError& e) {
+        throw UsageError(e.what());
+      }
+    }
     if (command == "rig") return runRig(Options(argc, argv, 2, {"labels", "label-table", "out", "max-gap"}, none));
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image", "relax-iterations", "poisson", "compare"},
+                                 "unit-mm", "image", "relax-iterations", "poisson", "compare", "mesh"},
                                 {"volumes", "no-root-motion", "relax"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");

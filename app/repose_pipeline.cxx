@@ -209,6 +209,7 @@ Pipeline::Pipeline() = default;
 Pipeline::~Pipeline() = default;
 
 void Pipeline::note(const std::string& stage) {
+  if (cancel_ && cancel_()) throw Cancelled();
   if (progress_) progress_(stage);
 }
 
@@ -310,6 +311,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   report_.push_back("surfaces: " + std::to_string(restSurfaces_->GetNumberOfPoints()) + " vertices, " +
                     std::to_string(restSurfaces_->GetNumberOfCells()) + " triangles, " +
                     std::to_string(binding->GetOutsideCount()) + " vertices outside the tet mesh");
+  if (cancel_ && cancel_()) throw Cancelled();
   connectPosing();
 }
 
@@ -541,7 +543,9 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
 std::string Pipeline::relaxationSummary() const {
   if (!relax_) return "";
   std::ostringstream m;
-  m << "FEM relaxation: " << relax_->GetCGIterations() << " CG iterations, relative residual "
+  m << "FEM relaxation: ";
+  if (relax_->GetModel() == 1) m << relax_->GetNewtonIterations() << " Newton iterations, ";
+  m << relax_->GetCGIterations() << " CG iterations, relative residual "
     << relax_->GetRelativeResidual() << ", inverted tets " << relax_->GetInvertedBefore() << " -> "
     << relax_->GetInvertedAfter() << ", " << relax_->GetLastRelaxTime() << " s";
   return m.str();

@@ -3,6 +3,7 @@
 // headless). Preprocessing (mesh, weights, surfaces, binding) runs once and is saved as a case
 // directory; posing re-runs only skinning, surface deformation and resampling.
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,11 @@ void updateOrThrow(vtkAlgorithm* filter, const std::string& what);
 void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
                    const std::string& imageName);
 
+/// Thrown by Pipeline::prepare when the cancel check returns true (between stages).
+struct Cancelled : std::runtime_error {
+  Cancelled() : std::runtime_error("preprocessing cancelled") {}
+};
+
 class Pipeline {
 public:
   Pipeline();
@@ -62,6 +68,9 @@ public:
 
   using Progress = std::function<void(const std::string& stage)>;
   void setProgress(Progress progress) { progress_ = std::move(progress); }
+  /// Polled between preprocessing stages (e.g. from another thread's cancel button); returning
+  /// true makes prepare() throw Cancelled. A running stage (TetGen) is not interrupted.
+  void setCancelCheck(std::function<bool()> cancel) { cancel_ = std::move(cancel); }
 
   // --- preprocessing -------------------------------------------------------------------------
   /// Validates the skeleton against the labels (every bone label present) and runs meshing,
@@ -119,6 +128,7 @@ private:
   void timed(const std::string& stage, double seconds);
 
   Progress progress_;
+  std::function<bool()> cancel_;
   std::string skeletonJson_, labelsExtension_ = ".nii.gz";
   vtkSmartPointer<vtkImageData> restLabels_, restImage_;
   vtkSmartPointer<vtkUnstructuredGrid> restMesh_;

@@ -93,8 +93,14 @@ int vtkReposeCorotationalRelax::RequestData(
     options.outerIterations = this->OuterIterations;
     options.tolerance = this->Tolerance;
     options.maxCgIterations = this->MaxIterations;
-    options.preconditioner = this->Preconditioner == 1 ? repose::CorotationalOptions::IncompleteCholesky
+    options.preconditioner = this->Preconditioner == 2 ? repose::CorotationalOptions::Cholmod
+      : this->Preconditioner == 1                      ? repose::CorotationalOptions::IncompleteCholesky
                                                        : repose::CorotationalOptions::Jacobi;
+    options.model = this->Model == 1 ? repose::CorotationalOptions::FixedCorotated
+                                     : repose::CorotationalOptions::Linear;
+    options.maxNewtonIterations = this->MaxNewtonIterations;
+    options.stepTolerance = this->StepTolerance;
+    options.energyTolerance = this->EnergyTolerance;
     repose::CorotationalReport report;
     repose::relaxCorotational(restNodes, tets, fixedBone, nodes, options, &report);
 
@@ -112,6 +118,7 @@ int vtkReposeCorotationalRelax::RequestData(
     {
       this->CGIterations += it;
     }
+    this->NewtonIterations = report.newtonIterations;
     this->RelativeResidual = report.relativeResidual.empty() ? 0.0 : report.relativeResidual.back();
     this->InvertedBefore = report.invertedBefore;
     this->InvertedAfter = report.invertedAfter;
@@ -132,5 +139,10 @@ void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "OuterIterations: " << this->OuterIterations << "\n";
   os << indent << "Tolerance: " << this->Tolerance << "\n";
   os << indent << "MaxIterations: " << this->MaxIterations << "\n";
-  os << indent << "Preconditioner: " << (this->Preconditioner == 1 ? "IncompleteCholesky" : "Jacobi") << "\n";
+  os << indent << "Preconditioner: "
+     << (this->Preconditioner == 2 ? "CHOLMOD" : this->Preconditioner == 1 ? "IncompleteCholesky" : "Jacobi") << "\n";
+  os << indent << "Model: " << (this->Model == 1 ? "FixedCorotated" : "Linear") << "\n";
+  os << indent << "MaxNewtonIterations: " << this->MaxNewtonIterations << "\n";
+  os << indent << "StepTolerance: " << this->StepTolerance << "\n";
+  os << indent << "EnergyTolerance: " << this->EnergyTolerance << "\n";
 }

@@ -1,8 +1,9 @@
 #ifndef vtkReposeCorotationalRelax_h
 #define vtkReposeCorotationalRelax_h
-// Refines a skinned tet mesh by a static corotational linear-elastic solve (Mueller & Gross 2004):
-// bone nodes stay at their skinned (rigid) positions, the soft tissue settles so that it keeps its
-// volume. Input 0: the posed (skinned) mesh, the warm start; input 1: the rest mesh with point data
+// Refines a skinned tet mesh by a static elastic solve: bone nodes stay at their skinned (rigid)
+// positions, the soft tissue settles so that it keeps its volume. Model 1 (default): the nonlinear
+// fixed-corotated energy by projected Newton (removes skinning's inverted tets, keeps det F to
+// second order); model 0: linearized corotational elasticity (Mueller & Gross 2004). Input 0: the posed (skinned) mesh, the warm start; input 1: the rest mesh with point data
 // "FixedBone" (the stress-free shape and the Dirichlet nodes). Output: input 0 with relaxed points.
 
 #include "ReposeFiltersModule.h"
@@ -26,15 +27,28 @@ public:
   vtkGetMacro(Tolerance, double);
   vtkSetClampMacro(MaxIterations, int, 1, 1000000);
   vtkGetMacro(MaxIterations, int);
-  /// 0 = Jacobi (threaded, default), 1 = incomplete Cholesky.
-  vtkSetClampMacro(Preconditioner, int, 0, 1);
+  /// 0 = Jacobi-PCG (default), 1 = incomplete-Cholesky PCG, 2 = CHOLMOD direct solve.
+  vtkSetClampMacro(Preconditioner, int, 0, 2);
   vtkGetMacro(Preconditioner, int);
+  /// 0 = linear corotational, 1 = fixed-corotated (nonlinear, default).
+  vtkSetClampMacro(Model, int, 0, 1);
+  vtkGetMacro(Model, int);
+  /// Model 1: at most this many Newton iterations (default 60), stopping once no node moves more
+  /// than StepTolerance times the mean rest edge length in an iteration (default 0.01).
+  vtkSetClampMacro(MaxNewtonIterations, int, 1, 10000);
+  vtkGetMacro(MaxNewtonIterations, int);
+  vtkSetClampMacro(StepTolerance, double, 1e-12, 1.0);
+  vtkGetMacro(StepTolerance, double);
+  /// Model 1: also stops when an iteration lowers the energy by less than this fraction (default 1e-3).
+  vtkSetClampMacro(EnergyTolerance, double, 0.0, 1.0);
+  vtkGetMacro(EnergyTolerance, double);
 
   void SetRestMeshConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
   void SetRestMeshData(vtkDataObject* mesh) { this->SetInputData(1, mesh); }
 
   /// Figures of the last execution.
-  vtkGetMacro(CGIterations, int);          ///< summed over outer iterations
+  vtkGetMacro(CGIterations, int);          ///< summed over outer (or Newton) iterations
+  vtkGetMacro(NewtonIterations, int);      ///< model 1; 0 for model 0
   vtkGetMacro(RelativeResidual, double);   ///< of the last outer iteration
   vtkGetMacro(InvertedBefore, int);
   vtkGetMacro(InvertedAfter, int);
@@ -51,7 +65,12 @@ protected:
   double Tolerance = 1e-6;
   int MaxIterations = 2000;
   int Preconditioner = 0;
+  int Model = 1;
+  int MaxNewtonIterations = 60;
+  double StepTolerance = 0.01;
+  double EnergyTolerance = 1e-3;
   int CGIterations = 0;
+  int NewtonIterations = 0;
   double RelativeResidual = 0;
   int InvertedBefore = 0;
   int InvertedAfter = 0;

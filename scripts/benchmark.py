@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Repose benchmark: per-stage time and peak memory on the built-in phantom, with voxel, node and tet
-counts, and the per-pose costs (skinning the nodes, moving the surfaces, pulling the posed volume).
+counts, and the per-pose costs (skinning the nodes, moving the surfaces, pulling the posed volume, and
+pulling one axial slice of it as a viewer would).
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark.py [--sizes small,medium,large]
        [--repose build/bin/repose] [--work DIR] [--poses N]
@@ -72,7 +73,14 @@ def pose_costs(case, poses):
     vo.SetInputConnection(1, mr.GetOutputPort())
     vo.SetInputConnection(2, sk.GetOutputPort())
     vo.SetInterpolationToNearest()
-    skin, surf, vol, voxels = [], [], [], 0
+    # One axial slice through the middle, as a viewer showing the posed labels would request it.
+    vs = vtkReposePosedVolume()
+    vs.SetInputConnection(0, lr.GetOutputPort())
+    vs.SetInputConnection(1, mr.GetOutputPort())
+    vs.SetInputConnection(2, sk.GetOutputPort())
+    vs.SetInterpolationToNearest()
+    vs.RestrictToSubExtentOn()
+    skin, surf, vol, sl, voxels = [], [], [], [], 0
     for i in range(poses + 1):
         a = 10 + 50 * i / max(poses, 1)
         sk.SetPoseJSON(json.dumps({"rotations": {
@@ -81,12 +89,16 @@ def pose_costs(case, poses):
         t = time.perf_counter(); sk.Update(); t1 = time.perf_counter()
         de.Update(); t2 = time.perf_counter()
         vo.Update(); t3 = time.perf_counter()
+        e = list(vo.GetFullOutputExtent())
+        e[4] = e[5] = e[5] // 2
+        vs.SetOutputSubExtent(e)
+        t4 = time.perf_counter(); vs.Update(); t5 = time.perf_counter()
         if i == 0:
             continue  # first pose pays one-off costs (weights conversion, binding cache)
-        skin.append(t1 - t); surf.append(t2 - t1); vol.append(t3 - t2)
+        skin.append(t1 - t); surf.append(t2 - t1); vol.append(t3 - t2); sl.append(t5 - t4)
         voxels = vo.GetOutput().GetNumberOfPoints()
     med = lambda v: sorted(v)[len(v) // 2]
-    return med(skin), med(surf), med(vol), voxels, sr.GetOutput().GetNumberOfPoints()
+    return med(skin), med(surf), med(vol), med(sl), voxels, sr.GetOutput().GetNumberOfPoints()
 
 
 def main():
@@ -108,17 +120,18 @@ def main():
         st = stage_times(out)
         m = re.search(r"tet mesh: (\d+) nodes, (\d+) tets", out)
         nodes, tets = int(m.group(1)), int(m.group(2))
-        skin, surf, vol, outvox, surfverts = pose_costs(f"{d}/case", args.poses)
+        skin, surf, vol, sl, outvox, surfverts = pose_costs(f"{d}/case", args.poses)
         rows.append((size, "x".join(dims), voxels, nodes, tets, surfverts, st.get("mesh", 0), st.get("weights", 0),
                      st.get("surfaces", 0), st.get("binding", 0), t_prep, mem, skin * 1e3, surf * 1e3,
-                     vol * 1e3, outvox / vol / 1e6))
+                     vol * 1e3, outvox / vol / 1e6, sl * 1e3))
         print(f"{size}: done", file=sys.stderr)
     print("| size | voxels | nodes | tets | surface verts | mesh s | weights s | surfaces s | binding s |"
-          " prepare total s | prepare peak MiB | skin nodes ms | move surfaces ms | posed labels ms | Mvox/s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          " prepare total s | prepare peak MiB | skin nodes ms | move surfaces ms | posed labels ms | Mvox/s |"
+          " posed slice ms |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r[0]} | {r[1]} ({r[2] / 1e6:.1f} M) | {r[3]} | {r[4]} | {r[5]} | {r[6]:.1f} | {r[7]:.1f} | {r[8]:.1f} |"
-              f" {r[9]:.1f} | {r[10]:.1f} | {r[11]:.0f} | {r[12]:.1f} | {r[13]:.1f} | {r[14]:.0f} | {r[15]:.0f} |")
+              f" {r[9]:.1f} | {r[10]:.1f} | {r[11]:.0f} | {r[12]:.1f} | {r[13]:.1f} | {r[14]:.0f} | {r[15]:.0f} | {r[16]:.1f} |")
 
 
 if __name__ == "__main__":

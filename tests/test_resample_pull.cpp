@@ -458,3 +458,78 @@ TEST(ResamplePull, RestCoverageKeepsExtensionsOutOfNeighbourInteriors) {
   opt.restCoverage = &wrong;
   EXPECT_THROW(repose::resampleLabelsPull(L, V, P, T, g, opt, 0), std::invalid_argument);
 }
+
+TEST(ResamplePull, SubExtentEqualsThatPartOfTheFullResample) {
+  // Rigidly moved peeled mesh with extrapolation and rest coverage, so the sub-extent must reproduce
+  // the extension's clean-up (dropped fragments, filled pinholes) at its borders too.
+  const ImageGrid g = testGrid();
+  const repose::LabelVolume L = blockLabels(g);
+  repose::IntensityVolume F;
+  F.grid = g;
+  F.data.resize(g.voxelCount());
+  for (std::size_t v = 0; v < F.data.size(); ++v) F.data[v] = float(std::sin(0.37 * double(v)) * 100.0);
+  Points V;
+  Tets T;
+  peeledMesh(g, V, T, 6);
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  const repose::MaskVolume C = repose::restMeshCoverage(g, V, T);
+  const Points P = moved(V, testMotion());
+  const ImageGrid out = repose::posedOutputGrid(g, P, 3);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;
+  opt.restCoverage = &C;
+  repose::PullResampleReport fullRep;
+  const repose::LabelVolume full = repose::resampleLabelsPull(L, V, P, T, out, opt, -3, &fullRep);
+  const repose::IntensityVolume fullF = repose::resampleIntensityPull(F, V, P, T, out, opt, -50.f);
+  ASSERT_GT(fullRep.extrapolatedVoxels, 0u);
+  const int nx = out.dims[0], ny = out.dims[1], nz = out.dims[2];
+  const std::array<int, 6> extents[] = {
+      {0, nx - 1, 0, ny - 1, nz / 2, nz / 2},              // one axial slice
+      {nx / 3, nx / 3, 0, ny - 1, 0, nz - 1},              // one sagittal slice
+      {4, nx - 7, ny / 2 - 3, ny / 2 + 4, 5, nz - 9},      // an interior block
+      {0, 2, 0, ny - 1, nz - 3, nz - 1},                   // a corner block
+      {0, nx - 1, 0, ny - 1, 0, nz - 1}};                  // everything
+  for (const auto& e : extents) {
+    repose::PullResampleOptions sub = opt;
+    sub.outputExtent = e;
+    repose::PullResampleReport rep;
+    const repose::LabelVolume part = repose::resampleLabelsPull(L, V, P, T, out, sub, -3, &rep);
+    const repose::IntensityVolume partF = repose::resampleIntensityPull(F, V, P, T, out, sub, -50.f);
+    const ImageGrid pg = repose::extentGrid(out, e);
+    ASSERT_TRUE(part.grid.sameGridAs(pg));
+    EXPECT_LT((pg.origin - out.indexToPhysical(Eigen::Vector3d(e[0], e[2], e[4]))).norm(), 1e-9);
+    ASSERT_EQ(part.data.size(), pg.voxelCount());
+    EXPECT_EQ(rep.outputVoxels, pg.voxelCount());
+    std::size_t covered = 0, mismatches = 0, mismatchesF = 0;
+    for (int k = e[4]; k <= e[5]; ++k)
+      for (int j = e[2]; j <= e[3]; ++j)
+        for (int i = e[0]; i <= e[1]; ++i) {
+          const int a = part.at(i - e[0], j - e[2], k - e[4]);
+          mismatches += a != full.at(i, j, k);
+          mismatchesF += partF.at(i - e[0], j - e[2], k - e[4]) != fullF.at(i, j, k);
+          covered += a != -3;
+        }
+    EXPECT_EQ(mismatches, 0u) << e[0] << " " << e[1] << " " << e[2] << " " << e[3] << " " << e[4] << " " << e[5];
+    EXPECT_EQ(mismatchesF, 0u);
+    EXPECT_EQ(rep.coveredVoxels + rep.extrapolatedVoxels, covered);  // block labels are never background
+  }
+  // Slabs partition the grid: their counts add up to the full resample's.
+  std::size_t coveredSum = 0, extrapolatedSum = 0;
+  for (int k0 = 0; k0 < nz; k0 += 7) {
+    repose::PullResampleOptions sub = opt;
+    sub.outputExtent = std::array<int, 6>{0, nx - 1, 0, ny - 1, k0, std::min(nz - 1, k0 + 6)};
+    repose::PullResampleReport rep;
+    repose::resampleLabelsPull(L, V, P, T, out, sub, -3, &rep);
+    coveredSum += rep.coveredVoxels;
+    extrapolatedSum += rep.extrapolatedVoxels;
+  }
+  EXPECT_EQ(coveredSum, fullRep.coveredVoxels);
+  EXPECT_EQ(extrapolatedSum, fullRep.extrapolatedVoxels);
+  // Extents outside the grid or empty are rejected.
+  for (const std::array<int, 6>& bad : {std::array<int, 6>{0, nx, 0, 0, 0, 0}, std::array<int, 6>{-1, 0, 0, 0, 0, 0},
+                                        std::array<int, 6>{3, 2, 0, 0, 0, 0}}) {
+    repose::PullResampleOptions sub = opt;
+    sub.outputExtent = bad;
+    EXPECT_THROW(repose::resampleLabelsPull(L, V, P, T, out, sub, -3), std::invalid_argument);
+  }
+}

@@ -69,3 +69,28 @@ TEST(RigidBoneOverlay, CollinearNodesAndBadInput) {
   EXPECT_TRUE(rigidBonesFromMesh(rest, line, line, {0, 0, 0}).empty());
   EXPECT_THROW(rigidBonesFromMesh(rest, line, line, {0, 0}), std::invalid_argument);
 }
+
+TEST(RigidBoneOverlay, BlockOfTheGridEqualsThatPartOfTheWholeOverlay) {
+  const LabelVolume rest = boxVolume();
+  RigidBone bone;
+  bone.transform.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.3, 1, 0.2).normalized()).toRotationMatrix();
+  bone.transform.translation() = Eigen::Vector3d(-1.2, 0.8, 2.1);
+  bone.labels = {7};
+  LabelVolume whole = rest;
+  for (auto& v : whole.data) v = v == 7 ? 1 : v;  // bone smeared away by the pull
+  LabelVolume block;
+  const int e[6] = {5, 24, 9, 20, 3, 27};
+  block.grid = whole.grid;
+  for (int a = 0; a < 3; ++a) block.grid.dims[a] = e[2 * a + 1] - e[2 * a] + 1;
+  block.grid.origin = whole.grid.indexToPhysical(Eigen::Vector3d(e[0], e[2], e[4]));
+  for (int k = e[4]; k <= e[5]; ++k)
+    for (int j = e[2]; j <= e[3]; ++j)
+      for (int i = e[0]; i <= e[1]; ++i) block.data.push_back(whole.at(i, j, k));
+  ASSERT_GT(overlayRigidBones(whole, rest, {bone}), 500u);
+  overlayRigidBones(block.data.data(), block.grid, rest, {bone});
+  int mismatches = 0;
+  for (int k = e[4]; k <= e[5]; ++k)
+    for (int j = e[2]; j <= e[3]; ++j)
+      for (int i = e[0]; i <= e[1]; ++i) mismatches += block.at(i - e[0], j - e[2], k - e[4]) != whole.at(i, j, k);
+  EXPECT_EQ(mismatches, 0);
+}

@@ -12,7 +12,6 @@
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
-#include "vtkSMPTools.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnstructuredGrid.h"
 
@@ -21,6 +20,7 @@
 #include "tet_boundary.h"
 
 #include <algorithm>
+#include <array>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -37,6 +37,21 @@ struct vtkReposePosedVolume::Internals
   // Rest-grid voxels inside the rest mesh, and the rest points and grid it was computed for.
   std::unique_ptr<repose::MaskVolume> Coverage;
   vtkMTimeType CoverageTime = 0;
+  // Rest tets (same key as the boundary, plus the cell types).
+  repose::Tets Tets;
+  vtkCellArray* TetsCells = nullptr;
+  vtkMTimeType TetsTime = 0;
+  vtkIdType TetsCount = -1;
+  // Rest nodes, and the points they were converted from.
+  repose::Points RestNodes;
+  vtkPoints* RestPoints = nullptr;
+  vtkMTimeType RestPointsTime = 0;
+  // Rest scalars as core volumes (one of the two), and the array they were converted from.
+  repose::LabelVolume Labels;
+  repose::IntensityVolume Values;
+  vtkDataArray* Scalars = nullptr;
+  vtkMTimeType ScalarsTime = 0;
+  int ScalarsKind = -1;
 };
 
 namespace
@@ -48,14 +63,6 @@ void CopyCast(const S* src, std::size_t n, D* dst)
   {
     dst[i] = static_cast<D>(src[i]);
   }
-}
-
-// Output buffers are hundreds of MB: copy (and first-touch) them in parallel.
-template <class T>
-void ParallelCopy(const std::vector<T>& src, T* dst)
-{
-  vtkSMPTools::For(0, static_cast<vtkIdType>(src.size()), 1 << 20,
-    [&](vtkIdType b, vtkIdType e) { std::copy(src.begin() + b, src.begin() + e, dst + b); });
 }
 
 template <class D>
@@ -126,6 +133,25 @@ repose::ImageGrid GridFromInfo(const int ext[6], const double origin[3], const d
   }
   g.origin = g.indexToPhysical(Eigen::Vector3d(ext[0], ext[2], ext[4]));
   return g;
+}
+
+// The requested sub-extent clamped to the full extent; throws if that is empty.
+std::array<int, 6> ClampedSubExtent(const int full[6], const int sub[6])
+{
+  std::array<int, 6> e;
+  for (int a = 0; a < 3; ++a)
+  {
+    e[2 * a] = std::max(full[2 * a], sub[2 * a]);
+    e[2 * a + 1] = std::min(full[2 * a + 1], sub[2 * a + 1]);
+    if (e[2 * a] > e[2 * a + 1])
+    {
+      throw std::invalid_argument("output sub-extent [" + std::to_string(sub[0]) + " " + std::to_string(sub[1]) +
+        " " + std::to_string(sub[2]) + " " + std::to_string(sub[3]) + " " + std::to_string(sub[4]) + " " +
+        std::to_string(sub[5]) + "] does not overlap the posed grid's extent [0 " + std::to_string(full[1]) +
+        " 0 " + std::to_string(full[3]) + " 0 " + std::to_string(full[5]) + "]");
+    }
+  }
+  return e;
 }
 
 void GridToArrays(const repose::ImageGrid& g, int ext[6], double origin[3], double spacing[3], double direction[9])
@@ -204,6 +230,12 @@ int vtkReposePosedVolume::RequestInformation(
     const repose::ImageGrid out =
       repose::posedOutputGrid(rest, ToPoints(posed->GetPoints()), this->PaddingVoxels);
     GridToArrays(out, ext, origin, spacing, direction);
+    std::copy(ext, ext + 6, this->FullOutputExtent);
+    if (this->RestrictToSubExtent)
+    {
+      const std::array<int, 6> sub = ClampedSubExtent(ext, this->OutputSubExtent);
+      std::copy(sub.begin(), sub.end(), ext);
+    }
   }
   catch (const std::exception& e)
   {
@@ -269,18 +301,68 @@ int vtkReposePosedVolume::RequestData(
       }
     }
     const repose::ImageGrid rest = GridFromInfo(ext, image->GetOrigin(), image->GetSpacing(), direction);
-    const repose::Points restNodes = ToPoints(restMesh->GetPoints());
+    // Rest-side conversions are cached: between poses only the posed nodes change.
+    Internals& in = *this->Internal;
+    vtkCellArray* cells = restMesh->GetCells();
+    const vtkMTimeType cellsTime = std::max(cells ? cells->GetMTime() : 0,
+      restMesh->GetCellTypesArray() ? restMesh->GetCellTypesArray()->GetMTime() : 0);
+    if (in.TetsCells != cells || in.TetsTime != cellsTime || in.TetsCount != restMesh->GetNumberOfCells())
+    {
+      in.TetsCells = nullptr;
+      in.Tets = ToTets(restMesh, "rest mesh");
+      in.TetsCells = cells;
+      in.TetsTime = cellsTime;
+      in.TetsCount = restMesh->GetNumberOfCells();
+    }
+    const repose::Tets& tets = in.Tets;
+    vtkPoints* restPoints = restMesh->GetPoints();
+    if (in.RestPoints != restPoints || !restPoints || in.RestPointsTime != restPoints->GetMTime())
+    {
+      in.RestNodes = ToPoints(restPoints);
+      in.RestPoints = restPoints;
+      in.RestPointsTime = restPoints ? restPoints->GetMTime() : 0;
+    }
+    const repose::Points& restNodes = in.RestNodes;
     const repose::Points posedNodes = ToPoints(posedMesh->GetPoints());
-    const repose::Tets tets = ToTets(restMesh, "rest mesh");
     const repose::ImageGrid outGrid = repose::posedOutputGrid(rest, posedNodes, this->PaddingVoxels);
+    int full[6];
+    double origin[3], spacing[3];
+    GridToArrays(outGrid, full, origin, spacing, direction);
+    std::copy(full, full + 6, this->FullOutputExtent);
     repose::PullResampleOptions options;
     options.extrapolationDistance = this->ExtrapolationDistance;
+    std::array<int, 6> voi = { full[0], full[1], full[2], full[3], full[4], full[5] };
+    if (this->RestrictToSubExtent)
+    {
+      voi = ClampedSubExtent(full, this->OutputSubExtent);
+      options.outputExtent = voi;
+    }
+    const repose::ImageGrid voiGrid = repose::extentGrid(outGrid, voi);
+    const vtkIdType voxels = static_cast<vtkIdType>(voiGrid.voxelCount());
+    // Rest scalars: converted again only when the array changes.
+    const int kind = this->Interpolation == Nearest ? 0 : 1;
+    if (in.Scalars != scalars || in.ScalarsTime != scalars->GetMTime() || in.ScalarsKind != kind)
+    {
+      in.Scalars = nullptr;
+      in.Labels.data.clear();
+      in.Values.data.clear();
+      if (kind == 0)
+      {
+        CopyScalars(scalars, in.Labels.data);
+      }
+      else
+      {
+        CopyScalars(scalars, in.Values.data);
+      }
+      in.Scalars = scalars;
+      in.ScalarsTime = scalars->GetMTime();
+      in.ScalarsKind = kind;
+    }
+    in.Labels.grid = rest;
+    in.Values.grid = rest;
     if (this->ExtrapolationDistance != 0)
     {
       // The boundary depends on the rest topology only: recompute it when the cells change.
-      Internals& in = *this->Internal;
-      vtkCellArray* cells = restMesh->GetCells();
-      const vtkMTimeType cellsTime = cells ? cells->GetMTime() : 0;
       if (!in.Boundary || in.Cells != cells || in.CellsTime != cellsTime ||
         in.NumberOfCells != restMesh->GetNumberOfCells())
       {
@@ -305,11 +387,12 @@ int vtkReposePosedVolume::RequestData(
     vtkSmartPointer<vtkDataArray> outScalars;
     if (this->Interpolation == Nearest)
     {
-      repose::LabelVolume labels;
-      labels.grid = rest;
-      CopyScalars(scalars, labels.data);
-      repose::LabelVolume result = repose::resampleLabelsPull(labels, restNodes, posedNodes, tets,
-        outGrid, options, static_cast<std::int32_t>(this->BackgroundValue), &report);
+      const repose::LabelVolume& labels = in.Labels;
+      // Written in place: the core fills every voxel.
+      auto array = vtkSmartPointer<vtkIntArray>::New();
+      array->SetNumberOfTuples(voxels);
+      repose::resampleLabelsPullInto(labels, restNodes, posedNodes, tets, outGrid, options, array->GetPointer(0),
+        static_cast<std::int32_t>(this->BackgroundValue), &report);
       this->RigidBoneVoxels = 0;
       vtkDataArray* fixed = restMesh->GetPointData()->GetArray("FixedBone");
       if (this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints())
@@ -320,30 +403,23 @@ int vtkReposePosedVolume::RequestData(
           fixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
         }
         const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, fixedBone);
-        this->RigidBoneVoxels = static_cast<vtkIdType>(repose::overlayRigidBones(result, labels, bones));
+        this->RigidBoneVoxels =
+          static_cast<vtkIdType>(repose::overlayRigidBones(array->GetPointer(0), voiGrid, labels, bones));
       }
-      auto array = vtkSmartPointer<vtkIntArray>::New();
-      array->SetNumberOfTuples(static_cast<vtkIdType>(result.data.size()));
-      ParallelCopy(result.data, array->GetPointer(0));
       outScalars = array;
     }
     else
     {
-      repose::IntensityVolume values;
-      values.grid = rest;
-      CopyScalars(scalars, values.data);
-      const repose::IntensityVolume result = repose::resampleIntensityPull(values, restNodes, posedNodes,
-        tets, outGrid, options, static_cast<float>(this->BackgroundValue), &report);
       auto array = vtkSmartPointer<vtkFloatArray>::New();
-      array->SetNumberOfTuples(static_cast<vtkIdType>(result.data.size()));
-      ParallelCopy(result.data, array->GetPointer(0));
+      array->SetNumberOfTuples(voxels);
+      repose::resampleIntensityPullInto(in.Values, restNodes, posedNodes, tets, outGrid, options,
+        array->GetPointer(0), static_cast<float>(this->BackgroundValue), &report);
       outScalars = array;
     }
     outScalars->SetName(scalars->GetName() ? scalars->GetName() : "ImageScalars");
-    double origin[3], spacing[3];
-    GridToArrays(outGrid, ext, origin, spacing, direction);
+    // The full grid's origin: the sub-extent's voxels keep their indices.
     output->Initialize();
-    output->SetExtent(ext);
+    output->SetExtent(voi.data());
     output->SetOrigin(origin);
     output->SetSpacing(spacing);
     output->SetDirectionMatrix(direction);
@@ -373,4 +449,8 @@ void vtkReposePosedVolume::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ExtrapolatedVoxels: " << this->ExtrapolatedVoxels << "\n";
   os << indent << "InvertedTets: " << this->InvertedTets << "\n";
   os << indent << "LastResampleTime: " << this->LastResampleTime << "\n";
+  os << indent << "RestrictToSubExtent: " << this->RestrictToSubExtent << "\n";
+  os << indent << "OutputSubExtent: " << this->OutputSubExtent[0] << " " << this->OutputSubExtent[1] << " "
+     << this->OutputSubExtent[2] << " " << this->OutputSubExtent[3] << " " << this->OutputSubExtent[4] << " "
+     << this->OutputSubExtent[5] << "\n";
 }

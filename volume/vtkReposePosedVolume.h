@@ -7,8 +7,9 @@
 // extended to hold the posed body (+PaddingVoxels), same spacing and direction matrix.
 // Nearest: int labels (VTK_INT output); Linear: trilinear intensities (VTK_FLOAT output).
 // The tet mesh stops short of the body's outer voxel layer (the mask is peeled before meshing), so the
-// boundary tets are extrapolated outward by ExtrapolationDistance; the mesh boundary is computed once
-// per rest topology and cached between poses.
+// boundary tets are extrapolated outward by ExtrapolationDistance; the mesh boundary, the rest tets,
+// nodes and scalars are converted once and cached between poses. RestrictToSubExtent resamples only a
+// block of the output (e.g. the slices a viewer shows).
 
 #include "ReposeVolumeModule.h"
 #include "vtkImageAlgorithm.h"
@@ -52,6 +53,19 @@ public:
   /// Voxels changed by the rigid-bone pass in the last execution.
   vtkGetMacro(RigidBoneVoxels, vtkIdType);
 
+  /// Sub-extent output (e.g. only the slices a viewer shows): with RestrictToSubExtent on, only the voxels
+  /// of OutputSubExtent {i0, i1, j0, j1, k0, k1} (indices of the full posed grid, clamped to it) are
+  /// resampled. The output then has that extent (also as its whole extent), with the full grid's
+  /// origin, spacing and direction, and its voxels equal the same voxels of the full output. Error if
+  /// the clamped extent is empty. Default off. FullOutputExtent is the full posed grid's extent (known
+  /// after UpdateInformation), to choose sub-extents from.
+  vtkSetMacro(RestrictToSubExtent, bool);
+  vtkGetMacro(RestrictToSubExtent, bool);
+  vtkBooleanMacro(RestrictToSubExtent, bool);
+  vtkSetVector6Macro(OutputSubExtent, int);
+  vtkGetVector6Macro(OutputSubExtent, int);
+  vtkGetVector6Macro(FullOutputExtent, int);
+
   /// Statistics of the last execution.
   vtkGetMacro(CoveredVoxels, vtkIdType);
   /// Voxels outside every posed tet filled by the extrapolation.
@@ -84,9 +98,12 @@ protected:
   vtkIdType ExtrapolatedVoxels = 0;
   vtkIdType InvertedTets = 0;
   double LastResampleTime = 0;
+  bool RestrictToSubExtent = false;
+  int OutputSubExtent[6] = { 0, -1, 0, -1, 0, -1 };
+  int FullOutputExtent[6] = { 0, -1, 0, -1, 0, -1 };
 
 private:
-  struct Internals;  // cached mesh boundary
+  struct Internals;  // conversions and mesh boundary cached between poses
   Internals* Internal;
 
   vtkReposePosedVolume(const vtkReposePosedVolume&) = delete;

@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <unistd.h>
 #include <stdexcept>
 #include <string>
 
@@ -14,11 +18,17 @@ Binding bindPoints(const Points& restNodes, const Tets& tets, const Points& poin
   if (tets.rows() == 0) throw std::invalid_argument("bind points: the tet mesh has no tets");
   if (!points.allFinite()) throw std::invalid_argument("bind points: non-finite point coordinates");
   const TetLocator locator(restNodes, tets);  // validates indices and nodes
+  return bindPoints(locator, points);
+}
+
+Binding bindPoints(const TetLocator& locator, const Points& points) {
+  if (!points.allFinite()) throw std::invalid_argument("bind points: non-finite point coordinates");
   const std::size_t n = std::size_t(points.rows());
   Binding b;
   b.tet.assign(n, -1);
   b.bary.resize(Eigen::Index(n), 4);
   std::atomic<std::size_t> outside{0};
+  std::atomic<bool> empty{false};
   parallelFor(n, [&](std::size_t begin, std::size_t end) {
     std::size_t localOutside = 0;
     for (std::size_t p = begin; p < end; ++p) {
@@ -27,12 +37,14 @@ Binding bindPoints(const Points& restNodes, const Tets& tets, const Points& poin
       if (!locator.findContaining(x, hit)) {
         hit = locator.findNearest(x);
         ++localOutside;
+        if (hit.tet < 0) empty = true;
       }
       b.tet[p] = hit.tet;
       b.bary.row(Eigen::Index(p)) = hit.bary.cast<float>().transpose();
     }
     outside += localOutside;
   }, 256);
+  if (empty) throw std::invalid_argument("bind points: the tet mesh has no tets");
   b.outsideCount = outside.load();
   return b;
 }
@@ -143,6 +155,99 @@ void applyBinding(const NodeBinding& binding, const float* posedNodes, std::size
 void applyBinding(const NodeBinding& binding, const double* posedNodes, std::size_t nodeCount,
                   float* posedPoints) {
   applyNodeBinding(binding, posedNodes, nodeCount, posedPoints);
+}
+
+namespace {
+
+constexpr char kMagic[8] = {'R', 'E', 'P', 'O', 'S', 'E', 'B', 'D'};
+constexpr std::uint32_t kVersion = 1;
+
+struct CacheHeader {
+  char magic[8];
+  std::uint32_t version;
+  std::uint32_t reserved;
+  std::uint64_t pointCount, pointsHash, meshHash, nodeCount, tetCount, outsideCount;
+};
+
+}  // namespace
+
+std::uint64_t contentHash(const void* data, std::size_t bytes, std::uint64_t seed) {
+  // 64-bit multiply-xorshift over 8-byte words (splitmix64's finaliser per word).
+  auto mix = [](std::uint64_t x) {
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    return x ^ (x >> 31);
+  };
+  std::uint64_t h = mix(seed ^ (0x9e3779b97f4a7c15ULL + bytes));
+  const auto* p = static_cast<const unsigned char*>(data);
+  std::size_t i = 0;
+  for (; i + 8 <= bytes; i += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, p + i, 8);
+    h = mix(h ^ w) + 0x9e3779b97f4a7c15ULL;
+  }
+  std::uint64_t tail = 0;
+  std::memcpy(&tail, p + i, bytes - i);
+  return mix(h ^ tail ^ (std::uint64_t(bytes - i) << 56));
+}
+
+void writeBindingCache(const std::string& path, const Binding& binding, std::uint64_t pointsHash,
+                       std::uint64_t meshHash, std::size_t nodeCount, std::size_t tetCount) {
+  const std::size_t n = binding.tet.size();
+  if (std::size_t(binding.bary.rows()) != n) throw std::invalid_argument("binding cache: inconsistent binding");
+  CacheHeader h{};
+  std::memcpy(h.magic, kMagic, 8);
+  h.version = kVersion;
+  h.pointCount = n;
+  h.pointsHash = pointsHash;
+  h.meshHash = meshHash;
+  h.nodeCount = nodeCount;
+  h.tetCount = tetCount;
+  h.outsideCount = binding.outsideCount;
+  const std::string temp = path + ".tmp" + std::to_string(::getpid());
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(&h), sizeof h);
+    std::vector<std::int32_t> tets(binding.tet.begin(), binding.tet.end());
+    out.write(reinterpret_cast<const char*>(tets.data()), std::streamsize(n * sizeof(std::int32_t)));
+    out.write(reinterpret_cast<const char*>(binding.bary.data()), std::streamsize(n * 4 * sizeof(float)));
+    out.flush();
+    if (!out) {
+      std::remove(temp.c_str());
+      throw std::runtime_error(path + ": cannot write the binding cache");
+    }
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    std::remove(temp.c_str());
+    throw std::runtime_error(path + ": cannot write the binding cache (rename failed)");
+  }
+}
+
+bool readBindingCache(const std::string& path, std::uint64_t pointsHash, std::uint64_t meshHash,
+                      std::size_t pointCount, std::size_t nodeCount, std::size_t tetCount, Binding& binding) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  CacheHeader h{};
+  if (!in.read(reinterpret_cast<char*>(&h), sizeof h)) return false;
+  if (std::memcmp(h.magic, kMagic, 8) != 0 || h.version != kVersion || h.pointCount != pointCount ||
+      h.pointsHash != pointsHash || h.meshHash != meshHash || h.nodeCount != nodeCount || h.tetCount != tetCount ||
+      h.outsideCount > pointCount)
+    return false;
+  const std::size_t n = pointCount;
+  std::vector<std::int32_t> tets(n);
+  BarycentricCoords bary(Eigen::Index(n), 4);
+  if (!in.read(reinterpret_cast<char*>(tets.data()), std::streamsize(n * sizeof(std::int32_t)))) return false;
+  if (!in.read(reinterpret_cast<char*>(bary.data()), std::streamsize(n * 4 * sizeof(float)))) return false;
+  if (in.peek() != std::char_traits<char>::eof()) return false;
+  for (std::int32_t t : tets)
+    if (t < 0 || std::size_t(t) >= tetCount) return false;
+  if (!bary.allFinite()) return false;
+  binding.tet.assign(tets.begin(), tets.end());
+  binding.bary = std::move(bary);
+  binding.outsideCount = std::size_t(h.outsideCount);
+  return true;
 }
 
 }  // namespace repose

@@ -22,8 +22,27 @@ struct CorotationalOptions {
   int maxCgIterations = 2000;
   /// Eigen's ConjugateGradient with DiagonalPreconditioner (Jacobi) or IncompleteCholesky (AMD
   /// ordering): fewer iterations, but the factorization and triangular solves cost more.
-  enum Preconditioner { Jacobi, IncompleteCholesky };
+  /// Cholmod: no CG, a CHOLMOD supernodal Cholesky factorization (symbolic analysis once per
+  /// call, numeric factorization per outer / Newton iteration) and a direct solve.
+  enum Preconditioner { Jacobi, IncompleteCholesky, Cholmod };
   Preconditioner preconditioner = Jacobi;
+
+  /// Linear: linearized corotational elasticity (Mueller & Gross), outerIterations solves; its
+  /// volume is only kept to first order (sum of the principal stretches, not their product).
+  /// FixedCorotated: the nonlinear, inversion-safe energy
+  ///   psi(F) = mu |F - R|^2 + lambda/2 (det F - 1)^2   (Stomakhin et al. 2012)
+  /// minimized by Gauss-Newton (its Hessian 2 mu (g_a.g_b) I + lambda (cof F g_a)(cof F g_b)^T is
+  /// PSD even for inverted tets) with PCG and a backtracking line search that accepts a step only
+  /// if it lowers the energy and does not increase the number of inverted tets.
+  enum Model { Linear, FixedCorotated };
+  Model model = Linear;
+  /// FixedCorotated: at most this many Gauss-Newton iterations.
+  int maxNewtonIterations = 60;
+  /// FixedCorotated: stops when the largest node move of a step is below stepTolerance times the
+  /// mean rest edge length (then det F is settled to about that relative accuracy).
+  double stepTolerance = 1e-3;
+  /// FixedCorotated: also stops when an iteration lowers the energy by less than this fraction.
+  double energyTolerance = 1e-6;
 };
 
 struct CorotationalReport {
@@ -35,6 +54,10 @@ struct CorotationalReport {
   double seconds = 0.0;                  ///< wall time of the whole call
   double assemblySeconds = 0.0;          ///< of which rotations + matrix assembly (all iterations)
   double solveSeconds = 0.0;             ///< of which CG (all iterations)
+  int newtonIterations = 0;              ///< FixedCorotated: Gauss-Newton iterations done
+  double energyBefore = 0.0;             ///< FixedCorotated: elastic energy of the input pose
+  double energyAfter = 0.0;              ///< ... and of the result
+  bool converged = false;                ///< FixedCorotated: the step tolerance was reached
 };
 
 /// Relaxes posed to the static equilibrium of corotational linear elasticity.
@@ -53,7 +76,11 @@ struct CorotationalReport {
 /// warm-started from posed. A pose with no free node is a no-op.
 /// Throws std::invalid_argument on size mismatches, out-of-range node indices, degenerate or
 /// inverted rest tets, bad options, or when no node is fixed (the system would be singular).
-/// Throws std::runtime_error if the incomplete Cholesky factorization fails.
+/// With options.model == FixedCorotated the nonlinear energy above is minimized instead (the report's
+/// cgIterations / relativeResidual are then per Newton iteration); the number of inverted tets never
+/// increases, and inverted skinned tets are pushed back since the energy is finite and smooth
+/// through det F = 0. Young's modulus scales the energy only: the minimizer does not depend on it.
+/// Throws std::runtime_error if the incomplete Cholesky or CHOLMOD factorization fails.
 void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
                        Points& posed, const CorotationalOptions& options,
                        CorotationalReport* report = nullptr);

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -19,10 +20,7 @@ namespace {
 // Slack on barycentric coordinates so voxel centres on shared faces are covered by at least one tet
 // despite rounding (no cracks); the lowest-numbered tet covering a voxel gives its value.
 constexpr double kBaryEps = 1e-7;
-// Slabs of k-slices are the unit of parallel work, each written by one thread only. Thick slabs set
-// up fewer tets twice (those crossing slab borders); a dozen slabs still balance the threads.
-int slabSlices(int nz) { return std::min(32, std::max(8, nz / 12)); }
-// Per-voxel coverage marks of a slab.
+// Per-voxel coverage marks.
 constexpr std::uint8_t kEmpty = 0, kCovered = 1, kExtrapolated = 2;
 // Extrapolated voxels farther than this many 6-steps from the posed mesh's voxels are detached debris.
 constexpr int kAttachReach = 4;
@@ -53,6 +51,16 @@ void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& res
                                options.restCoverage->data.size() != restGrid.voxelCount()))
     throw std::invalid_argument("pull resample: rest coverage mask does not match the rest grid; compute it with "
                                 "restMeshCoverage(rest grid, restNodes, tets)");
+  if (options.outputExtent) {
+    const auto& e = *options.outputExtent;
+    for (int a = 0; a < 3; ++a)
+      if (e[2 * a] < 0 || e[2 * a + 1] < e[2 * a] || e[2 * a + 1] >= outGrid.dims[a])
+        throw std::invalid_argument("pull resample: output extent [" + std::to_string(e[0]) + " " + std::to_string(e[1]) +
+                                    " " + std::to_string(e[2]) + " " + std::to_string(e[3]) + " " + std::to_string(e[4]) +
+                                    " " + std::to_string(e[5]) + "] is empty or not inside the output grid (dims " +
+                                    std::to_string(outGrid.dims[0]) + " " + std::to_string(outGrid.dims[1]) + " " +
+                                    std::to_string(outGrid.dims[2]) + ")");
+  }
   if (options.boundary && options.boundary->boundaryFaceMask.size() != std::size_t(tets.rows()))
     throw std::invalid_argument("pull resample: tet boundary has " +
                                 std::to_string(options.boundary->boundaryFaceMask.size()) + " tets but the mesh has " +
@@ -74,6 +82,19 @@ struct TetSetup {
 };
 
 using Vertices = double[4][3];
+
+// floor / ceil without a libm call (baseline x86-64 has no rounding instruction); arguments are
+// clamped far outside any grid first, so the conversion cannot overflow.
+inline double floorFast(double x) {
+  x = std::min(std::max(x, -1e9), 1e9);
+  const double i = double(static_cast<long long>(x));
+  return i - (i > x);
+}
+inline double ceilFast(double x) {
+  x = std::min(std::max(x, -1e9), 1e9);
+  const double i = double(static_cast<long long>(x));
+  return i + (i < x);
+}
 
 // Rest tet well inside the rest grid (the slack around a tet is far below 1e-3 voxels).
 bool restInside(const Vertices& r, const int restDims[3]) {
@@ -137,22 +158,22 @@ inline void setupMap(TetSetup& s) {
   s.mapReady = true;
 }
 
-// Calls emit(i0, i1, j, k, rk) for every run of voxel centres (i0..i1, j, k), k in [k0, k1], with all
+// Calls emit(i0, i1, j, k, rk) for every run of voxel centres (i0..i1, j, k) in the box [lo, hi], with all
 // λ_a >= -kBaryEps; rk = rest index of voxel (0, 0, k). Each λ_a is linear in i along a row, so a run
 // is an intersection of half-lines. Tets are a few voxels wide, so rows are short: the per-row work is
 // kept branch-free (fixed-size bound lists, integer rounding).
 template <class Emit>
-inline void scanTet(TetSetup& s, int k0, int k1, int nx, int ny, Emit&& emit) {
-  const double kb = std::max(double(k0), std::ceil(s.lo[2] - 1e-6));
-  const double ke = std::min(double(k1), std::floor(s.hi[2] + 1e-6));
-  const double ib = std::max(0.0, std::ceil(s.lo[0] - 1e-6));
-  const double ie = std::min(double(nx - 1), std::floor(s.hi[0] + 1e-6));
+inline void scanTet(TetSetup& s, const int lo[3], const int hi[3], Emit&& emit) {
+  const double kb = std::max(double(lo[2]), ceilFast(s.lo[2] - 1e-6));
+  const double ke = std::min(double(hi[2]), floorFast(s.hi[2] + 1e-6));
+  const double ib = std::max(double(lo[0]), ceilFast(s.lo[0] - 1e-6));
+  const double ie = std::min(double(hi[0]), floorFast(s.hi[0] + 1e-6));
   if (kb > ke || ib > ie) return;
   // Tets about a voxel wide (common: meshes are often finer than the image) hold few candidate centres:
   // testing them directly is cheaper than setting up the scanlines.
   {
-    const double jb0 = std::max(0.0, std::ceil(s.lo[1] - 1e-6));
-    const double je0 = std::min(double(ny - 1), std::floor(s.hi[1] + 1e-6));
+    const double jb0 = std::max(double(lo[1]), ceilFast(s.lo[1] - 1e-6));
+    const double je0 = std::min(double(hi[1]), floorFast(s.hi[1] + 1e-6));
     if (jb0 > je0) return;
     if ((ke - kb + 1) * (je0 - jb0 + 1) * (ie - ib + 1) <= 8) {
       for (int k = int(kb); k <= int(ke); ++k)
@@ -223,16 +244,16 @@ inline void scanTet(TetSetup& s, int k0, int k1, int nx, int ny, Emit&& emit) {
     }
     ylo = std::min(ylo, std::min(ya, yb)) - 1e-4;
     yhi = std::max(yhi, std::max(ya, yb)) + 1e-4;
-    if (!(yhi >= 0)) continue;
-    double jb = ylo > 0 ? std::ceil(ylo) : 0.0;
-    double je = std::min(double(ny - 1), std::floor(yhi));
+    if (!(yhi >= lo[1])) continue;
+    double jb = std::max(double(lo[1]), ceilFast(ylo));
+    double je = std::min(double(hi[1]), floorFast(yhi));
     for (int q = 0; q < nf; ++q) {  // flat: λ = g.y j + g.z k + c >= 0
       const int a = flat[q];
       const double base = s.g[a][2] * k + s.c[a];
       if (s.g[a][1] > 0)
-        jb = std::max(jb, std::ceil(-base / s.g[a][1]));
+        jb = std::max(jb, ceilFast(-base / s.g[a][1]));
       else if (s.g[a][1] < 0)
-        je = std::min(je, std::floor(-base / s.g[a][1]));
+        je = std::min(je, floorFast(-base / s.g[a][1]));
       else if (base < 0)
         je = jb - 1;
     }
@@ -245,86 +266,14 @@ inline void scanTet(TetSetup& s, int k0, int k1, int nx, int ny, Emit&& emit) {
     double rk[3];
     for (int m = 0; m < 3; ++m) rk[m] = s.A[m][2] * k + s.b[m];
     for (int j = int(jb); j <= int(je); ++j) {
-      const double lo = std::max(std::max(ib, al[0] + bl[0] * j), std::max(al[1] + bl[1] * j, al[2] + bl[2] * j));
-      const double hi = std::min(std::min(ie, au[0] + bu[0] * j), std::min(au[1] + bu[1] * j, au[2] + bu[2] * j));
-      if (!(lo <= hi)) continue;
-      // 0 <= lo <= hi < nx here, so truncation is floor.
-      int i0 = int(lo);
-      i0 += double(i0) < lo;
-      const int i1 = int(hi);
+      const double rlo = std::max(std::max(ib, al[0] + bl[0] * j), std::max(al[1] + bl[1] * j, al[2] + bl[2] * j));
+      const double rhi = std::min(std::min(ie, au[0] + bu[0] * j), std::min(au[1] + bu[1] * j, au[2] + bu[2] * j));
+      if (!(rlo <= rhi)) continue;
+      // 0 <= rlo <= rhi here, so truncation is floor.
+      int i0 = int(rlo);
+      i0 += double(i0) < rlo;
+      const int i1 = int(rhi);
       if (i0 <= i1) emit(i0, i1, j, k, rk);
-    }
-  }
-}
-
-// Tets bucketed by slab (CSR), in increasing tet order.
-struct SlabBuckets {
-  std::vector<std::size_t> offset;
-  std::vector<int> items;
-};
-
-SlabBuckets bucketize(std::size_t n, int nSlabs, const std::vector<int>& slabLo, const std::vector<int>& slabHi) {
-  // Fixed chunks counted and filled in parallel; chunk-major offsets within each slab keep tet order.
-  const std::size_t nChunks = std::min<std::size_t>(64, std::max<std::size_t>(1, n / 16384));
-  const std::size_t S = std::size_t(nSlabs);
-  std::vector<std::size_t> start(nChunks * S, 0);
-  auto chunkRange = [&](std::size_t c, std::size_t& b, std::size_t& e) {
-    b = c * n / nChunks;
-    e = (c + 1) * n / nChunks;
-  };
-  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    for (std::size_t c = cb; c < ce; ++c) {
-      std::size_t b, e;
-      chunkRange(c, b, e);
-      for (std::size_t t = b; t < e; ++t)
-        for (int s = slabLo[t]; s <= slabHi[t]; ++s) ++start[c * S + std::size_t(s)];
-    }
-  }, 1);
-  SlabBuckets B;
-  B.offset.assign(S + 1, 0);
-  std::size_t running = 0;
-  for (std::size_t s = 0; s < S; ++s) {
-    for (std::size_t c = 0; c < nChunks; ++c) {
-      const std::size_t count = start[c * S + s];
-      start[c * S + s] = running;
-      running += count;
-    }
-    B.offset[s + 1] = running;
-  }
-  B.items.resize(running);
-  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    for (std::size_t c = cb; c < ce; ++c) {
-      std::size_t b, e;
-      chunkRange(c, b, e);
-      std::size_t* fill = &start[c * S];
-      for (std::size_t t = b; t < e; ++t)
-        for (int s = slabLo[t]; s <= slabHi[t]; ++s) B.items[fill[s]++] = int(t);
-    }
-  }, 1);
-  return B;
-}
-
-// Everything the slab loop needs, computed once per call.
-struct Prepared {
-  int nx = 0, ny = 0, nz = 0, slab = 1, nSlabs = 0;
-  int restDims[3] = {0, 0, 0};
-  std::vector<float> P, R;  // #V x 3 node positions in output / rest index space
-  SlabBuckets tets;         // pass 1
-  // Pass 2: boundary tets (not inverted) and the barycentric relaxation δ_a of each of their vertices.
-  std::vector<std::uint8_t> inside;  // #T: restInside of the tet
-  std::vector<int> extTet;
-  std::vector<float> extDelta;  // 4 per entry of extTet
-  double distance = 0;          // extrapolation distance d (mm)
-  SlabBuckets ext;              // indices into extTet
-  std::size_t inverted = 0;
-};
-
-inline void loadTet(const Prepared& pr, const Tets& tets, std::size_t t, Vertices& p, Vertices& r) {
-  for (int a = 0; a < 4; ++a) {
-    const std::size_t v = std::size_t(tets(t, a)) * 3;
-    for (int m = 0; m < 3; ++m) {
-      p[a][m] = pr.P[v + m];
-      r[a][m] = pr.R[v + m];
     }
   }
 }
@@ -342,123 +291,6 @@ void inflate(const Vertices& p, const float* delta, Vertices& q) {
     for (int m = 0; m < 3; ++m) q[c][m] = (1.0 + S) * p[c][m] - sum[m];
 }
 
-void slabRange(double zlo, double zhi, int nz, int slab, int& lo, int& hi) {
-  const double kLo = std::max(0.0, std::ceil(zlo - 1e-6));
-  const double kHi = std::min(double(nz - 1), std::floor(zhi + 1e-6));
-  lo = 0;
-  hi = -1;
-  if (kLo > kHi) return;
-  lo = int(kLo) / slab;
-  hi = int(kHi) / slab;
-}
-
-Prepared prepare(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes, const Tets& tets,
-                 const ImageGrid& outGrid, const PullResampleOptions& options) {
-  Prepared pr;
-  pr.nx = outGrid.dims[0];
-  pr.ny = outGrid.dims[1];
-  pr.nz = outGrid.dims[2];
-  pr.slab = slabSlices(pr.nz);
-  pr.nSlabs = (pr.nz + pr.slab - 1) / pr.slab;
-  for (int a = 0; a < 3; ++a) pr.restDims[a] = restGrid.dims[a];
-  const std::size_t nV = std::size_t(posedNodes.rows());
-  const std::size_t nT = std::size_t(tets.rows());
-  pr.P.resize(3 * nV);
-  pr.R.resize(3 * nV);
-  parallelFor(nV, [&](std::size_t b, std::size_t e) {
-    for (std::size_t v = b; v < e; ++v) {
-      const Eigen::Vector3d p = outGrid.physicalToIndex(posedNodes.row(v).transpose());
-      const Eigen::Vector3d r = restGrid.physicalToIndex(restNodes.row(v).transpose());
-      for (int m = 0; m < 3; ++m) {
-        pr.P[3 * v + m] = float(p[m]);
-        pr.R[3 * v + m] = float(r[m]);
-      }
-    }
-  });
-
-  // Orientation in index space flips with a left-handed direction matrix.
-  const double orient = outGrid.direction.determinant() < 0 ? -1.0 : 1.0;
-  const double distance = options.extrapolationDistance < 0 ? 2.0 * restGrid.spacing.maxCoeff()
-                                                             : options.extrapolationDistance;
-  pr.distance = distance;
-  const std::uint8_t* boundary =
-      options.boundary && distance > 0 ? options.boundary->boundaryFaceMask.data() : nullptr;
-  const Eigen::Vector3d invSpacing = outGrid.spacing.cwiseInverse();
-  std::vector<int> slabLo(nT), slabHi(nT);
-  pr.inside.assign(nT, 0);
-  std::vector<float> delta(boundary ? 4 * nT : 0);
-  std::vector<int> extLo(boundary ? nT : 0), extHi(boundary ? nT : 0);
-  std::atomic<std::size_t> inverted{0};
-  parallelFor(nT, [&](std::size_t b, std::size_t e) {
-    std::size_t localInverted = 0;
-    Vertices p, r, q;
-    TetSetup st;
-    for (std::size_t t = b; t < e; ++t) {
-      slabLo[t] = 0;
-      slabHi[t] = -1;
-      if (boundary) {
-        extLo[t] = 0;
-        extHi[t] = -1;
-      }
-      loadTet(pr, tets, t, p, r);
-      Eigen::Matrix3d M;
-      for (int c = 0; c < 3; ++c)
-        for (int m = 0; m < 3; ++m) M(m, c) = p[c + 1][m] - p[0][m];
-      const double det = orient * M.determinant();
-      const double scale = M.colwise().norm().prod();
-      if (!(det > 1e-12 * scale)) {
-        ++localInverted;
-        continue;
-      }
-      double zlo = p[0][2], zhi = p[0][2];
-      for (int c = 1; c < 4; ++c) {
-        zlo = std::min(zlo, p[c][2]);
-        zhi = std::max(zhi, p[c][2]);
-      }
-      // Tets finer than the voxels often hold no voxel centre at all: leave those out of the buckets.
-      bool holdsCentre = true;
-      for (int m = 0; m < 2; ++m) {
-        const double lo = std::min(std::min(p[0][m], p[1][m]), std::min(p[2][m], p[3][m]));
-        const double hi = std::max(std::max(p[0][m], p[1][m]), std::max(p[2][m], p[3][m]));
-        const int n = m == 0 ? pr.nx : pr.ny;
-        holdsCentre = holdsCentre && std::max(0.0, std::ceil(lo - 1e-6)) <= std::min(double(n - 1), std::floor(hi + 1e-6));
-      }
-      if (holdsCentre) slabRange(zlo, zhi, pr.nz, pr.slab, slabLo[t], slabHi[t]);
-      pr.inside[t] = restInside(r, pr.restDims);
-      if (!boundary || !boundary[t] || !setupTet(p, r, st)) continue;
-      // δ_a = d / h_a, h_a (mm) = 1 / |physical gradient of λ_a|.
-      float* dl = &delta[4 * t];
-      for (int a = 0; a < 4; ++a) {
-        const Eigen::Vector3d g(st.g[a][0], st.g[a][1], st.g[a][2]);
-        dl[a] = (boundary[t] >> a) & 1 ? float(distance * g.cwiseProduct(invSpacing).norm()) : 0.0f;
-      }
-      inflate(p, dl, q);
-      zlo = q[0][2];
-      zhi = q[0][2];
-      for (int c = 1; c < 4; ++c) {
-        zlo = std::min(zlo, q[c][2]);
-        zhi = std::max(zhi, q[c][2]);
-      }
-      slabRange(zlo, zhi, pr.nz, pr.slab, extLo[t], extHi[t]);
-    }
-    inverted += localInverted;
-  }, 4096);
-  pr.inverted = inverted.load();
-  pr.tets = bucketize(nT, pr.nSlabs, slabLo, slabHi);
-  if (boundary) {
-    std::vector<int> lo, hi;
-    for (std::size_t t = 0; t < nT; ++t) {
-      if (extLo[t] > extHi[t]) continue;
-      pr.extTet.push_back(int(t));
-      pr.extDelta.insert(pr.extDelta.end(), &delta[4 * t], &delta[4 * t] + 4);
-      lo.push_back(extLo[t]);
-      hi.push_back(extHi[t]);
-    }
-    pr.ext = bucketize(pr.extTet.size(), pr.nSlabs, lo, hi);
-  }
-  return pr;
-}
-
 // Distance (mm) of a voxel of row (j, k) beyond the boundary faces of the (uninflated) tet it is
 // extrapolated from: max over relaxed faces a of -λ_a h_a, with λ_a linear in i.
 struct FaceDistance {
@@ -470,86 +302,62 @@ struct FaceDistance {
   }
 };
 
-// Runs both passes slab by slab. Kernel provides
-//   fill(begin, end)                       background into output voxels [begin, end)
-//   cover(s, i0, i1, j, rk, row, mark)     pass 1: write and mark every voxel of the run (overwriting)
-//   extend(s, i0, i1, j, rk, row, mark, fd)  pass 2: write voxels whose mark is kEmpty, mark them
-// where row is the linear index of voxel (0, j, k), mark the marks of that row. Pass 1 visits tets in decreasing order, so the
-// lowest-numbered tet covering a voxel writes last; pass 2 in increasing order, first writer wins.
-template <class Kernel>
-void run(const Prepared& pr, const Tets& tets, const Kernel& kernel, PullResampleReport* report,
-         std::chrono::steady_clock::time_point start, std::size_t outputVoxels,
-         std::vector<std::uint8_t>* allMarks = nullptr) {
-  const int nx = pr.nx, ny = pr.ny, nz = pr.nz, nSlabs = pr.nSlabs;
-  const std::size_t sliceSize = std::size_t(nx) * ny;
-  std::atomic<std::size_t> covered{0}, extrapolated{0};
-  // Marks of the whole output when the caller wants them (pinhole filling), else per slab.
-  if (allMarks) allMarks->assign(outputVoxels, kEmpty);
-  parallelFor(std::size_t(nSlabs), [&](std::size_t b, std::size_t e) {
-    std::vector<std::uint8_t> marks(allMarks ? 0 : sliceSize * std::size_t(pr.slab));
-    TetSetup st, orig;
-    Vertices p, r, q, qr;
-    std::size_t localCovered = 0, localExtrapolated = 0;
-    for (std::size_t w = b; w < e; ++w) {
-      // Interleave slabs so a static two-way split still gets both ends of the body.
-      const std::size_t half = (std::size_t(nSlabs) + 1) / 2;
-      const int s = w < half ? int(2 * w) : int(2 * (w - half) + 1);
-      const int k0 = s * pr.slab, k1 = std::min(nz - 1, k0 + pr.slab - 1);
-      const std::size_t slabBase = std::size_t(k0) * sliceSize;
-      const std::size_t slabVoxels = std::size_t(k1 - k0 + 1) * sliceSize;
-      std::uint8_t* mark = allMarks ? allMarks->data() + slabBase : marks.data();
-      if (!allMarks) std::memset(mark, kEmpty, slabVoxels);
-      kernel.fill(slabBase, slabBase + slabVoxels);
-      for (std::size_t q1 = pr.tets.offset[s + 1]; q1-- > pr.tets.offset[s];) {
-        const std::size_t t = std::size_t(pr.tets.items[q1]);
-        loadTet(pr, tets, t, p, r);
-        if (!setupTet(p, r, st)) continue;
-        st.restInside = pr.inside[t] != 0;
-        scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k, const double* rk) {
-          const std::size_t row = std::size_t(k) * sliceSize + std::size_t(j) * nx;
-          kernel.cover(st, i0, i1, j, rk, row, mark + (row - slabBase));
-        });
-      }
-      if (!pr.ext.offset.empty()) {
-        for (std::size_t q2 = pr.ext.offset[s]; q2 < pr.ext.offset[s + 1]; ++q2) {
-          const std::size_t x = std::size_t(pr.ext.items[q2]);
-          loadTet(pr, tets, std::size_t(pr.extTet[x]), p, r);
-          const float* delta = &pr.extDelta[4 * x];
-          if (!setupTet(p, r, orig)) continue;
-          inflate(p, delta, q);
-          inflate(r, delta, qr);
-          if (!setupTet(q, qr, st)) continue;
-          st.restInside = false;
-          FaceDistance fd;
-          for (int a = 0; a < 4; ++a) fd.h[a] = delta[a] > 0 ? pr.distance / delta[a] : 0.0;  // h_a = d / δ_a
-          scanTet(st, k0, k1, nx, ny, [&](int i0, int i1, int j, int k, const double* rk) {
-            const std::size_t row = std::size_t(k) * sliceSize + std::size_t(j) * nx;
-            for (int a = 0; a < 4; ++a) {
-              fd.alpha[a] = orig.g[a][1] * j + orig.g[a][2] * k + orig.c[a] - kBaryEps;
-              fd.beta[a] = orig.g[a][0];
-            }
-            kernel.extend(st, i0, i1, j, rk, row, mark + (row - slabBase), fd);
-          });
-        }
-      }
-      std::uint32_t c = 0, x = 0;  // per slab: fits, and lets the loop vectorize
-      for (std::size_t v = 0; v < slabVoxels; ++v) {
-        c += mark[v] == kCovered;
-        x += mark[v] == kExtrapolated;
-      }
-      localCovered += c;
-      localExtrapolated += x;
+// Output voxels worked on: an index box of the output grid (bounds inclusive), stored i fastest.
+struct Box {
+  int lo[3], hi[3], n[3];
+  Box(const int l[3], const int h[3]) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = l[a];
+      hi[a] = h[a];
+      n[a] = h[a] - l[a] + 1;
     }
-    covered += localCovered;
-    extrapolated += localExtrapolated;
-  }, 1);
-  if (report) {
-    report->outputVoxels = outputVoxels;
-    report->coveredVoxels = covered.load();
-    report->extrapolatedVoxels = extrapolated.load();
-    report->invertedTets = pr.inverted;
-    report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
+  std::size_t count() const { return std::size_t(n[0]) * n[1] * n[2]; }
+  std::size_t rows() const { return std::size_t(n[1]) * n[2]; }
+  std::size_t index(int i, int j, int k) const {
+    return (std::size_t(k - lo[2]) * n[1] + std::size_t(j - lo[1])) * n[0] + std::size_t(i - lo[0]);
+  }
+  bool same(const Box& o) const {
+    for (int a = 0; a < 3; ++a)
+      if (lo[a] != o.lo[a] || hi[a] != o.hi[a]) return false;
+    return true;
+  }
+};
+
+// One voxel's value from one tet: `v` is the voxel's index in the work box.
+template <class T>
+struct Sample {
+  std::size_t v;
+  T value;
+};
+
+// Samples of a fixed chunk of consecutive tets (in tet order), split by z-range of the work box so the
+// ranges can be written in parallel.
+template <class T>
+struct ChunkSamples {
+  std::vector<std::vector<Sample<T>>> cover, extend;
+  std::size_t inverted = 0;
+};
+
+inline void loadVertices(const std::vector<float>& X, const Tets& tets, std::size_t t, Vertices& p) {
+  for (int a = 0; a < 4; ++a) {
+    const std::size_t v = std::size_t(tets(t, a)) * 3;
+    for (int m = 0; m < 3; ++m) p[a][m] = X[v + m];
+  }
+}
+
+// Voxel centres of the box within the tet's bounding box (same rounding as scanTet): [lo, hi] per axis;
+// false if there are none.
+inline bool latticeBox(const Vertices& p, const Box& box, int lo[3], int hi[3]) {
+  bool any = true;
+  for (int m = 0; m < 3; ++m) {
+    const double a = std::min(std::min(p[0][m], p[1][m]), std::min(p[2][m], p[3][m]));
+    const double b = std::max(std::max(p[0][m], p[1][m]), std::max(p[2][m], p[3][m]));
+    lo[m] = int(std::max(double(box.lo[m]), ceilFast(a - 1e-6)));
+    hi[m] = int(std::min(double(box.hi[m]), floorFast(b + 1e-6)));
+    any = any && lo[m] <= hi[m];
+  }
+  return any;
 }
 
 // Rest index of voxel (i0, j, k) under the tet's map (rk: that of (0, 0, k)), plus `offset` on every axis.
@@ -557,17 +365,17 @@ inline void restStart(const TetSetup& s, int i0, int j, const double* rk, double
   for (int m = 0; m < 3; ++m) r[m] = rk[m] + s.A[m][1] * j + s.A[m][0] * i0 + offset;
 }
 
+// Kernels turn a run of voxels (i0..i1, j) of a tet into samples: push(i - i0, value).
+//   cover(s, i0, i1, j, rk, push)       pass 1: every voxel of the run
+//   extend(s, i0, i1, j, rk, fd, push)  pass 2 (extension): only voxels it may write
 struct LabelKernel {
+  using Value = std::int32_t;
   const std::int32_t* src;
-  std::int32_t* dst;
   int dx, dy, dz;
   std::int32_t background;
   const std::uint8_t* restCovered;  // may be null
   double nearFace;                  // mm beyond its own faces within which an extension may sample covered voxels
 
-  void fill(std::size_t b, std::size_t e) const {
-    if (background != 0) std::fill(dst + b, dst + e, background);
-  }
   // Nearest voxel: the one whose footprint [c-0.5, c+0.5) holds the rest point. With r shifted by +0.5
   // the index is the truncation, and the rest index steps by a constant vector along the row.
   bool inside(const double r[3]) const {
@@ -576,52 +384,42 @@ struct LabelKernel {
   std::size_t index(const double r[3]) const {
     return (std::size_t(int(r[2])) * std::size_t(dy) + std::size_t(int(r[1]))) * std::size_t(dx) + std::size_t(int(r[0]));
   }
-  void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark) const {
+  template <class Push>
+  void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, Push&& push) const {
     double r[3];
     restStart(s, i0, j, rk, 0.5, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
-    std::int32_t* d = dst + row;
     if (s.restInside) {
-      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
-        d[i] = src[index(r)];
-        mark[i] = kCovered;
-      }
+      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) push(i - i0, src[index(r)]);
     } else {
-      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
-        d[i] = inside(r) ? src[index(r)] : background;
-        mark[i] = kCovered;
-      }
+      for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
+        push(i - i0, inside(r) ? src[index(r)] : background);
     }
   }
-  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark,
-              const FaceDistance& fd) const {
+  template <class Push>
+  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, const FaceDistance& fd, Push&& push) const {
     double r[3];
     restStart(s, i0, j, rk, 0.5, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
-    std::int32_t* d = dst + row;
     for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
-      if (mark[i] != kEmpty || !inside(r)) continue;
+      if (!inside(r)) continue;
       const std::size_t n = index(r);
       if (restCovered && restCovered[n] && fd.at(i) > nearFace) continue;  // another part's interior
       const std::int32_t v = src[n];
       if (v == background) continue;  // never paint background over a neighbour's extension
-      d[i] = v;
-      mark[i] = kExtrapolated;
+      push(i - i0, v);
     }
   }
 };
 
 struct IntensityKernel {
+  using Value = float;
   const float* src;
-  float* dst;
   int dx, dy, dz;
   float background;
   const std::uint8_t* restCovered;  // may be null
   double nearFace;                  // mm beyond its own faces within which an extension may sample covered voxels
 
-  void fill(std::size_t b, std::size_t e) const {
-    if (background != 0.0f) std::fill(dst + b, dst + e, background);
-  }
   bool inside(const double r[3]) const {
     return r[0] >= -0.5 && r[1] >= -0.5 && r[2] >= -0.5 && r[0] < dx - 0.5 && r[1] < dy - 0.5 && r[2] < dz - 0.5;
   }
@@ -648,129 +446,65 @@ struct IntensityKernel {
     const double c1 = c01 + f[1] * (c11 - c01);
     return float(c0 + f[2] * (c1 - c0));
   }
-  void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark) const {
+  template <class Push>
+  void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, Push&& push) const {
     double r[3];
     restStart(s, i0, j, rk, 0.0, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
-    float* d = dst + row;
-    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
-      d[i] = s.restInside || inside(r) ? sample(r) : background;
-      mark[i] = kCovered;
-    }
+    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
+      push(i - i0, s.restInside || inside(r) ? sample(r) : background);
   }
-  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, std::size_t row, std::uint8_t* mark,
-              const FaceDistance& fd) const {
+  template <class Push>
+  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, const FaceDistance& fd, Push&& push) const {
     double r[3];
     restStart(s, i0, j, rk, 0.0, r);
     const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
-    float* d = dst + row;
     for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
-      if (mark[i] != kEmpty || !inside(r)) continue;
+      if (!inside(r)) continue;
       if (restCovered) {
         const std::size_t n = (std::size_t(int(r[2] + 0.5)) * std::size_t(dy) + std::size_t(int(r[1] + 0.5))) *
                                   std::size_t(dx) + std::size_t(int(r[0] + 0.5));
         if (restCovered[n] && fd.at(i) > nearFace) continue;
       }
-      d[i] = sample(r);
-      mark[i] = kExtrapolated;
+      push(i - i0, sample(r));
     }
   }
 };
 
 // Coverage only: 1 on every voxel of a run.
 struct CoverageKernel {
-  std::uint8_t* dst;
-  void fill(std::size_t, std::size_t) const {}
-  void cover(const TetSetup&, int i0, int i1, int, const double*, std::size_t row, std::uint8_t*) const {
-    std::fill(dst + row + i0, dst + row + i1 + 1, std::uint8_t(1));
+  using Value = std::uint8_t;
+  template <class Push>
+  void cover(const TetSetup&, int i0, int i1, int, const double*, Push&& push) const {
+    for (int i = i0; i <= i1; ++i) push(i - i0, std::uint8_t(1));
   }
-  void extend(const TetSetup&, int, int, int, const double*, std::size_t, std::uint8_t*, const FaceDistance&) const {}
+  template <class Push>
+  void extend(const TetSetup&, int, int, int, const double*, const FaceDistance&, Push&&) const {}
 };
 
-// Voxels outside the posed mesh that the extension left empty although at least 5 of their 6
-// neighbours were written: wedge gaps where the inflated boundary tets of a convex ridge do not quite
-// meet. They are filled from those neighbours (the most common label, or the mean intensity), so the
-// posed skin has no pinholes. Voxels inside the posed mesh are never touched. Returns the count.
-template <class T, class Combine>
-std::size_t fillPinholes(T* out, const std::vector<std::uint8_t>& marks, int nx, int ny, int nz, Combine combine) {
-  const std::size_t sliceSize = std::size_t(nx) * ny;
-  std::atomic<std::size_t> filled{0};
-  parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
-    std::size_t local = 0;
-    T values[6];
-    for (std::size_t k = kb; k < ke; ++k)
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) {
-          const std::size_t v = k * sliceSize + std::size_t(j) * nx + std::size_t(i);
-          if (marks[v] != kEmpty) continue;
-          int n = 0;
-          auto take = [&](bool ok, std::size_t w) {
-            if (ok && marks[w] != kEmpty) values[n++] = out[w];
-          };
-          take(i > 0, v - 1);
-          take(i + 1 < nx, v + 1);
-          take(j > 0, v - std::size_t(nx));
-          take(j + 1 < ny, v + std::size_t(nx));
-          take(k > 0, v - sliceSize);
-          take(int(k) + 1 < nz, v + sliceSize);
-          if (n >= 5) {
-            out[v] = combine(values, n);
-            ++local;
-          }
-        }
-    filled += local;
-  }, 1);
-  return filled.load();
-}
-
-// Extrapolated voxels must hang on to the body: in a concave crease the inflated boundary tets fan
-// out and can copy skin a voxel or two away from the posed surface. Keeps the extrapolated voxels
-// 6-connected (within `reach` steps) to voxels inside the posed mesh; the others become background
-// (marked empty again). Returns how many were dropped.
-template <class T>
-std::size_t dropDetachedExtrapolation(T* out, std::vector<std::uint8_t>& marks, int nx, int ny, int nz, int reach,
-                                      T background) {
-  constexpr std::uint8_t kAttached = 3;
-  const std::size_t sliceSize = std::size_t(nx) * ny, n = marks.size();
-  std::vector<std::uint8_t> next;
-  for (int pass = 0; pass < reach; ++pass) {
-    next = marks;
-    std::atomic<std::size_t> changed{0};
-    parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
-      std::size_t local = 0;
-      for (std::size_t k = kb; k < ke; ++k)
-        for (int j = 0; j < ny; ++j)
-          for (int i = 0; i < nx; ++i) {
-            const std::size_t v = k * sliceSize + std::size_t(j) * nx + std::size_t(i);
-            if (marks[v] != kExtrapolated) continue;
-            auto attached = [&](bool ok, std::size_t w) { return ok && (marks[w] == kCovered || marks[w] == kAttached); };
-            if (attached(i > 0, v - 1) || attached(i + 1 < nx, v + 1) || attached(j > 0, v - std::size_t(nx)) ||
-                attached(j + 1 < ny, v + std::size_t(nx)) || attached(k > 0, v - sliceSize) ||
-                attached(int(k) + 1 < nz, v + sliceSize)) {
-              next[v] = kAttached;
-              ++local;
-            }
-          }
-      changed += local;
-    }, 1);
-    marks.swap(next);
-    if (changed.load() == 0) break;
+// First and last non-empty mark of a row ([n, -1] if none), by 8-byte words.
+inline void rowSpan(const std::uint8_t* m, int n, int& first, int& last) {
+  first = n;
+  last = -1;
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, m + i, 8);
+    if (w) break;
   }
-  std::atomic<std::size_t> dropped{0};
-  parallelFor(n, [&](std::size_t b, std::size_t e) {
-    std::size_t local = 0;
-    for (std::size_t v = b; v < e; ++v) {
-      if (marks[v] == kExtrapolated) {
-        out[v] = background;
-        marks[v] = kEmpty;
-        ++local;
-      } else if (marks[v] == kAttached) {
-        marks[v] = kExtrapolated;
-      }
-    }
-    dropped += local;
-  });
-  return dropped.load();
+  for (; i < n; ++i)
+    if (m[i]) break;
+  if (i >= n) return;
+  first = i;
+  int e = n;
+  for (; e - 8 >= first; e -= 8) {
+    std::uint64_t w;
+    std::memcpy(&w, m + e - 8, 8);
+    if (w) break;
+  }
+  for (; e > first; --e)
+    if (m[e - 1]) break;
+  last = e - 1;
 }
 
 std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
@@ -785,35 +519,401 @@ std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
   return best;
 }
 
-// Both passes, then (with extrapolation) detached fragments dropped and pinholes closed with
-// `combine` of the neighbours (most common label, or mean intensity).
-template <class T, class Kernel, class Combine>
-void resamplePasses(const Prepared& pr, const Tets& tets, const Kernel& kernel, Volume<T>& out, T background,
-                    Combine combine, PullResampleReport* report, std::chrono::steady_clock::time_point start) {
-  std::vector<std::uint8_t> marks;
-  const bool extrapolate = !pr.ext.offset.empty();
-  run(pr, tets, kernel, report, start, out.grid.voxelCount(), extrapolate ? &marks : nullptr);
-  if (!extrapolate) return;
-  const std::size_t dropped =
-      dropDetachedExtrapolation(out.data.data(), marks, pr.nx, pr.ny, pr.nz, kAttachReach, background);
-  const std::size_t filled = fillPinholes(out.data.data(), marks, pr.nx, pr.ny, pr.nz, combine);
+// The whole resampling of the output voxels in `voi` (output index box) into `dst` (voi's voxels, i
+// fastest). Work is O(#tets + written voxels) plus filling dst:
+//  1. one pass over fixed chunks of tets (each set up once): pass-1 samples of every voxel centre in a
+//     tet, extension samples of the inflated boundary tets, kept per chunk and z-range;
+//  2. per z-range, pass-1 samples written from the last tet to the first (the lowest-numbered tet
+//     covering a voxel wins), then extension samples from the first tet on into voxels still empty;
+//  3. with extrapolation, detached extrapolated voxels dropped and pinholes filled, visiting only
+//     the rows that hold written voxels.
+// With extrapolation the work box is `voi` grown by the reach of step 3, so a sub-extent gets exactly
+// the values of the full resample.
+template <class Kernel, class Combine>
+void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes, const Tets& tets,
+                  const ImageGrid& outGrid, const PullResampleOptions& options, const Kernel& kernel,
+                  typename Kernel::Value background, Combine combine, const Box& voi,
+                  typename Kernel::Value* dst, PullResampleReport* report,
+                  std::chrono::steady_clock::time_point start) {
+  using T = typename Kernel::Value;
+  const double distance = options.extrapolationDistance < 0 ? 2.0 * restGrid.spacing.maxCoeff()
+                                                             : options.extrapolationDistance;
+  const std::uint8_t* boundary =
+      options.boundary && distance > 0 ? options.boundary->boundaryFaceMask.data() : nullptr;
+  // Step 3 reads marks up to kAttachReach + 1 voxels away.
+  const int pad = boundary ? kAttachReach + 1 : 0;
+  int wlo[3], whi[3];
+  for (int a = 0; a < 3; ++a) {
+    wlo[a] = std::max(0, voi.lo[a] - pad);
+    whi[a] = std::min(outGrid.dims[a] - 1, voi.hi[a] + pad);
+  }
+  const Box W(wlo, whi);
+  const int nx = W.n[0], ny = W.n[1], nz = W.n[2];
+  const std::size_t sliceSize = std::size_t(nx) * ny, nW = W.count();
+  const bool direct = W.same(voi);
+  std::vector<T> workBuffer(direct ? 0 : nW);
+  T* out = direct ? dst : workBuffer.data();
+  // Background everywhere (first touch in parallel: output buffers are hundreds of MB).
+  std::unique_ptr<std::uint8_t[]> marks(new std::uint8_t[nW]);
+  parallelFor(nW, [&](std::size_t b, std::size_t e) {
+    std::fill(out + b, out + e, background);
+    std::memset(marks.get() + b, kEmpty, e - b);
+  }, 1 << 18);
+
+  // Node positions in output / rest index space.
+  const std::size_t nV = std::size_t(posedNodes.rows()), nT = std::size_t(tets.rows());
+  std::vector<float> P(3 * nV), R(3 * nV);
+  parallelFor(nV, [&](std::size_t b, std::size_t e) {
+    for (std::size_t v = b; v < e; ++v) {
+      const Eigen::Vector3d p = outGrid.physicalToIndex(posedNodes.row(v).transpose());
+      const Eigen::Vector3d r = restGrid.physicalToIndex(restNodes.row(v).transpose());
+      for (int m = 0; m < 3; ++m) {
+        P[3 * v + m] = float(p[m]);
+        R[3 * v + m] = float(r[m]);
+      }
+    }
+  });
+  int restDims[3];
+  for (int a = 0; a < 3; ++a) restDims[a] = restGrid.dims[a];
+  // Orientation in index space flips with a left-handed direction matrix.
+  const double orient = outGrid.direction.determinant() < 0 ? -1.0 : 1.0;
+  const Eigen::Vector3d invSpacing = outGrid.spacing.cwiseInverse();
+
+  // 1. Samples per chunk of tets and z-range.
+  const int nRanges = std::min(nz, 16);
+  std::vector<std::uint8_t> rangeOf(static_cast<std::size_t>(nz));
+  for (int k = 0; k < nz; ++k) rangeOf[std::size_t(k)] = std::uint8_t(std::size_t(k) * nRanges / nz);
+  const std::size_t nChunks = std::min<std::size_t>(512, std::max<std::size_t>(1, nT / 4096));
+  std::vector<ChunkSamples<T>> chunks(nChunks);
+  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
+    Vertices p, r, q, qr;
+    TetSetup st, xs, sm;
+    float delta[4];
+    for (std::size_t c = cb; c < ce; ++c) {
+      ChunkSamples<T>& C = chunks[c];
+      C.cover.resize(std::size_t(nRanges));
+      C.extend.resize(std::size_t(nRanges));
+      for (std::size_t t = c * nT / nChunks, te = (c + 1) * nT / nChunks; t < te; ++t) {
+        loadVertices(P, tets, t, p);
+        // Edges, and the rows of their inverse times det (as in setupTet).
+        double e[3][3], n[3][3];
+        for (int q1 = 0; q1 < 3; ++q1)
+          for (int m = 0; m < 3; ++m) e[q1][m] = p[q1 + 1][m] - p[0][m];
+        for (int q1 = 0; q1 < 3; ++q1) {
+          const double* u = e[(q1 + 1) % 3];
+          const double* w = e[(q1 + 2) % 3];
+          n[q1][0] = u[1] * w[2] - u[2] * w[1];
+          n[q1][1] = u[2] * w[0] - u[0] * w[2];
+          n[q1][2] = u[0] * w[1] - u[1] * w[0];
+        }
+        const double det = e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
+        // Inverted or flat: orient * det <= 1e-12 x the product of the edge lengths.
+        const double od = orient * det;
+        const double l2 = (e[0][0] * e[0][0] + e[0][1] * e[0][1] + e[0][2] * e[0][2]) *
+                          (e[1][0] * e[1][0] + e[1][1] * e[1][1] + e[1][2] * e[1][2]) *
+                          (e[2][0] * e[2][0] + e[2][1] * e[2][1] + e[2][2] * e[2][2]);
+        if (!(od > 0 && od * od > 1e-24 * l2)) {
+          ++C.inverted;
+          continue;
+        }
+        // Tets finer than the voxels often hold no voxel centre at all.
+        int lb[3], ub[3];
+        const bool covers = latticeBox(p, W, lb, ub);
+        const bool extends = boundary && boundary[t];
+        if (!covers && !extends) continue;
+        const int candidates = covers ? (ub[0] - lb[0] + 1) * (ub[1] - lb[1] + 1) * (ub[2] - lb[2] + 1) : 0;
+        if (candidates > 0 && candidates <= 8) {
+          // Few candidate centres: test them directly; the rest map only once one is inside.
+          const double inv = 1.0 / det;
+          for (int q1 = 0; q1 < 3; ++q1) {
+            for (int m = 0; m < 3; ++m) sm.g[q1 + 1][m] = n[q1][m] * inv;
+            sm.c[q1 + 1] = -(sm.g[q1 + 1][0] * p[0][0] + sm.g[q1 + 1][1] * p[0][1] + sm.g[q1 + 1][2] * p[0][2]);
+          }
+          for (int m = 0; m < 3; ++m) sm.g[0][m] = -(sm.g[1][m] + sm.g[2][m] + sm.g[3][m]);
+          sm.c[0] = 1.0 - (sm.c[1] + sm.c[2] + sm.c[3]);
+          for (int a = 0; a < 4; ++a) sm.c[a] += kBaryEps;
+          for (int m = 0; m < 3; ++m) sm.p0[m] = p[0][m];
+          sm.mapReady = false;
+          sm.restInside = false;
+          for (int k = lb[2]; k <= ub[2]; ++k)
+            for (int j = lb[1]; j <= ub[1]; ++j)
+              for (int i = lb[0]; i <= ub[0]; ++i) {
+                bool in = true;
+                for (int a = 0; a < 4; ++a)
+                  in = in & (sm.g[a][0] * i + sm.g[a][1] * j + sm.g[a][2] * k + sm.c[a] >= 0);
+                if (!in) continue;
+                if (!sm.mapReady) {
+                  loadVertices(R, tets, t, r);
+                  sm.rest = r;
+                  setupMap(sm);
+                }
+                double rk[3];
+                for (int m = 0; m < 3; ++m) rk[m] = sm.A[m][2] * k + sm.b[m];
+                auto& out1 = C.cover[rangeOf[std::size_t(k - W.lo[2])]];
+                const std::size_t base = W.index(i, j, k);
+                kernel.cover(sm, i, i, j, rk, [&](int off, T value) { out1.push_back({base + std::size_t(off), value}); });
+              }
+          if (!extends) continue;
+        }
+        loadVertices(R, tets, t, r);
+        if (!setupTet(p, r, st)) continue;
+        if (candidates > 8) {
+          st.restInside = restInside(r, restDims);
+          scanTet(st, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
+            auto& out1 = C.cover[rangeOf[std::size_t(k - W.lo[2])]];
+            const std::size_t base = W.index(i0, j, k);
+            kernel.cover(st, i0, i1, j, rk, [&](int off, T value) { out1.push_back({base + std::size_t(off), value}); });
+          });
+        }
+        if (!extends) continue;
+        // Inflated by λ_a >= -δ_a, δ_a = d / h_a, h_a (mm) = 1 / |physical gradient of λ_a|.
+        for (int a = 0; a < 4; ++a) {
+          const Eigen::Vector3d g(st.g[a][0], st.g[a][1], st.g[a][2]);
+          delta[a] = (boundary[t] >> a) & 1 ? float(distance * g.cwiseProduct(invSpacing).norm()) : 0.0f;
+        }
+        inflate(p, delta, q);
+        inflate(r, delta, qr);
+        if (!setupTet(q, qr, xs)) continue;
+        xs.restInside = false;
+        FaceDistance fd;
+        for (int a = 0; a < 4; ++a) fd.h[a] = delta[a] > 0 ? distance / delta[a] : 0.0;  // h_a = d / δ_a
+        scanTet(xs, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
+          for (int a = 0; a < 4; ++a) {
+            fd.alpha[a] = st.g[a][1] * j + st.g[a][2] * k + st.c[a] - kBaryEps;
+            fd.beta[a] = st.g[a][0];
+          }
+          auto& out2 = C.extend[rangeOf[std::size_t(k - W.lo[2])]];
+          const std::size_t base = W.index(i0, j, k);
+          kernel.extend(xs, i0, i1, j, rk, fd, [&](int off, T value) { out2.push_back({base + std::size_t(off), value}); });
+        });
+      }
+    }
+  }, 1);
+
+  // 2. Writes, one z-range per task.
+  std::vector<std::vector<std::size_t>> extrapolated(static_cast<std::size_t>(nRanges));
+  parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
+    for (std::size_t g = rb; g < re; ++g) {
+      for (std::size_t c = nChunks; c-- > 0;) {
+        const auto& S = chunks[c].cover[g];
+        for (std::size_t q1 = S.size(); q1-- > 0;) {
+          out[S[q1].v] = S[q1].value;
+          marks[S[q1].v] = kCovered;
+        }
+      }
+      auto& X = extrapolated[g];
+      for (std::size_t c = 0; c < nChunks; ++c)
+        for (const auto& s : chunks[c].extend[g])
+          if (marks[s.v] == kEmpty) {
+            out[s.v] = s.value;
+            marks[s.v] = kExtrapolated;
+            X.push_back(s.v);
+          }
+    }
+  }, 1);
+  std::size_t inverted = 0;
+  for (auto& C : chunks) inverted += C.inverted;
+  std::vector<ChunkSamples<T>>().swap(chunks);
+
+  // Rows holding written voxels: [first, last] of each (first > last if none).
+  std::vector<int> first(W.rows()), last(W.rows());
+  parallelFor(W.rows(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t row = b; row < e; ++row) rowSpan(marks.get() + row * nx, nx, first[row], last[row]);
+  }, 256);
+
+  std::atomic<std::size_t> filledInVoi{0};
+  if (boundary) {
+    // 3a. Extrapolated voxels must hang on to the body: in a concave crease the inflated boundary tets
+    // fan out and can copy skin a voxel or two away from the posed surface. Keeps the extrapolated
+    // voxels 6-connected (within kAttachReach steps) to voxels inside the posed mesh; the others
+    // become background (marked empty again). Breadth-first by whole steps (Jacobi), so the result
+    // does not depend on the visiting order.
+    constexpr std::uint8_t kAttached = 3;
+    auto attachedNeighbour = [&](std::size_t v) {
+      const std::size_t row = v / std::size_t(nx);
+      const int i = int(v - row * std::size_t(nx));
+      const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
+      auto ok = [&](std::size_t w) { return marks[w] == kCovered || marks[w] == kAttached; };
+      return (i > 0 && ok(v - 1)) || (i + 1 < nx && ok(v + 1)) || (j > 0 && ok(v - std::size_t(nx))) ||
+             (j + 1 < ny && ok(v + std::size_t(nx))) || (k > 0 && ok(v - sliceSize)) ||
+             (k + 1 < nz && ok(v + sliceSize));
+    };
+    std::vector<std::vector<std::size_t>> pending = extrapolated, attached(static_cast<std::size_t>(nRanges));
+    for (int pass = 0; pass < kAttachReach; ++pass) {
+      std::atomic<std::size_t> changed{0};
+      parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
+        for (std::size_t g = rb; g < re; ++g) {
+          auto& A = attached[g];
+          A.clear();
+          std::size_t keep = 0;
+          for (std::size_t v : pending[g]) {
+            if (attachedNeighbour(v))
+              A.push_back(v);
+            else
+              pending[g][keep++] = v;
+          }
+          pending[g].resize(keep);
+          changed += A.size();
+        }
+      }, 1);
+      if (changed.load() == 0) break;
+      parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
+        for (std::size_t g = rb; g < re; ++g)
+          for (std::size_t v : attached[g]) marks[v] = kAttached;
+      }, 1);
+    }
+    parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
+      for (std::size_t g = rb; g < re; ++g) {
+        for (std::size_t v : pending[g]) {
+          out[v] = background;
+          marks[v] = kEmpty;
+        }
+        for (std::size_t v : extrapolated[g])
+          if (marks[v] == kAttached) marks[v] = kExtrapolated;
+      }
+    }, 1);
+
+    // 3b. Voxels outside the posed mesh that the extension left empty although at least 5 of their 6
+    // neighbours were written: wedge gaps where the inflated boundary tets of a convex ridge do not
+    // quite meet. They are filled from those neighbours (the most common label, or the mean
+    // intensity), so the posed skin has no pinholes. Voxels inside the posed mesh are never touched.
+    // Such a voxel has at least 3 written neighbours in the 4 adjacent rows, so only rows next to
+    // written rows are visited.
+    auto hasSpan = [&](int j, int k) {
+      if (j < 0 || j >= ny || k < 0 || k >= nz) return false;
+      const std::size_t row = std::size_t(k) * ny + std::size_t(j);
+      return first[row] <= last[row];
+    };
+    parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
+      std::size_t local = 0;
+      T values[6];
+      for (int k = int(kb); k < int(ke); ++k)
+        for (int j = 0; j < ny; ++j) {
+          const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
+          int count = 0, ib = nx, ie = -1;
+          for (const auto& jk : nbr)
+            if (hasSpan(jk[0], jk[1])) {
+              ++count;
+              const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
+              ib = std::min(ib, first[row]);
+              ie = std::max(ie, last[row]);
+            }
+          if (count < 3) continue;
+          for (int i = ib; i <= ie; ++i) {
+            const std::size_t v = std::size_t(k) * sliceSize + std::size_t(j) * nx + std::size_t(i);
+            if (marks[v] != kEmpty) continue;
+            int n = 0;
+            auto take = [&](bool ok, std::size_t w) {
+              if (ok && marks[w] != kEmpty) values[n++] = out[w];
+            };
+            take(i > 0, v - 1);
+            take(i + 1 < nx, v + 1);
+            take(j > 0, v - std::size_t(nx));
+            take(j + 1 < ny, v + std::size_t(nx));
+            take(k > 0, v - sliceSize);
+            take(k + 1 < nz, v + sliceSize);
+            if (n >= 5) {
+              out[v] = combine(values, n);
+              const int gi = i + W.lo[0], gj = j + W.lo[1], gk = k + W.lo[2];
+              local += gi >= voi.lo[0] && gi <= voi.hi[0] && gj >= voi.lo[1] && gj <= voi.hi[1] &&
+                       gk >= voi.lo[2] && gk <= voi.hi[2];
+            }
+          }
+        }
+      filledInVoi += local;
+    }, 1);
+  }
+
+  // Counts over the requested voxels; then those voxels into dst when the work box is larger.
+  std::atomic<std::size_t> covered{0}, extended{0};
+  parallelFor(std::size_t(voi.n[2]), [&](std::size_t kb, std::size_t ke) {
+    std::size_t c = 0, x = 0;
+    for (int k = voi.lo[2] + int(kb); k < voi.lo[2] + int(ke); ++k)
+      for (int j = voi.lo[1]; j <= voi.hi[1]; ++j) {
+        const std::size_t row = std::size_t(k - W.lo[2]) * ny + std::size_t(j - W.lo[1]);
+        const std::size_t base = W.index(voi.lo[0], j, k);
+        if (!direct)
+          std::copy(out + base, out + base + voi.n[0], dst + voi.index(voi.lo[0], j, k));
+        const int ib = std::max(first[row], voi.lo[0] - W.lo[0]), ie = std::min(last[row], voi.hi[0] - W.lo[0]);
+        for (int i = ib; i <= ie; ++i) {
+          const std::uint8_t m = marks[row * nx + std::size_t(i)];
+          c += m == kCovered;
+          x += m == kExtrapolated;
+        }
+      }
+    covered += c;
+    extended += x;
+  }, 1);
   if (report) {
-    report->extrapolatedVoxels = report->extrapolatedVoxels + filled - dropped;
+    report->outputVoxels = voi.count();
+    report->coveredVoxels = covered.load();
+    report->extrapolatedVoxels = extended.load() + filledInVoi.load();
+    report->invertedTets = inverted;
     report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 }
 
+Box voiOf(const ImageGrid& outGrid, const PullResampleOptions& options) {
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = options.outputExtent ? (*options.outputExtent)[2 * a] : 0;
+    hi[a] = options.outputExtent ? (*options.outputExtent)[2 * a + 1] : outGrid.dims[a] - 1;
+  }
+  return Box(lo, hi);
+}
+
+LabelKernel labelKernel(const LabelVolume& rest, const PullResampleOptions& options, std::int32_t background) {
+  return LabelKernel{rest.data.data(), rest.grid.dims[0], rest.grid.dims[1], rest.grid.dims[2], background,
+                     options.restCoverage ? options.restCoverage->data.data() : nullptr,
+                     rest.grid.spacing.maxCoeff()};
+}
+
+IntensityKernel intensityKernel(const IntensityVolume& rest, const PullResampleOptions& options, float background) {
+  return IntensityKernel{rest.data.data(), rest.grid.dims[0], rest.grid.dims[1], rest.grid.dims[2], background,
+                         options.restCoverage ? options.restCoverage->data.data() : nullptr,
+                         rest.grid.spacing.maxCoeff()};
+}
+
+float meanOf(const float* v, int n) {
+  double sum = 0;
+  for (int i = 0; i < n; ++i) sum += v[i];
+  return float(sum / n);
+}
+
 }  // namespace
 
+ImageGrid extentGrid(const ImageGrid& grid, const std::array<int, 6>& extent) {
+  for (int a = 0; a < 3; ++a)
+    if (extent[2 * a] < 0 || extent[2 * a + 1] < extent[2 * a] || extent[2 * a + 1] >= grid.dims[a])
+      throw std::invalid_argument("extent grid: extent is empty or not inside the grid");
+  ImageGrid g = grid;
+  for (int a = 0; a < 3; ++a) g.dims[a] = extent[2 * a + 1] - extent[2 * a] + 1;
+  g.origin = grid.indexToPhysical(Eigen::Vector3d(extent[0], extent[2], extent[4]));
+  return g;
+}
+
 MaskVolume restMeshCoverage(const ImageGrid& restGrid, const Points& restNodes, const Tets& tets) {
+  const auto start = std::chrono::steady_clock::now();
   const PullResampleOptions none;
   validate(restGrid, restGrid.voxelCount(), restNodes, restNodes, tets, restGrid, none);
-  const Prepared pr = prepare(restGrid, restNodes, restNodes, tets, restGrid, none);
   MaskVolume out;
   out.grid = restGrid;
-  out.data.assign(restGrid.voxelCount(), 0);
-  run(pr, tets, CoverageKernel{out.data.data()}, nullptr, std::chrono::steady_clock::now(), restGrid.voxelCount());
+  out.data.resize(restGrid.voxelCount());
+  resampleInto(restGrid, restNodes, restNodes, tets, restGrid, none, CoverageKernel{}, std::uint8_t(0),
+               [](const std::uint8_t*, int) { return std::uint8_t(0); }, voiOf(restGrid, none), out.data.data(),
+               nullptr, start);
   return out;
+}
+
+void resampleLabelsPullInto(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
+                            const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                            std::int32_t* out, std::int32_t background, PullResampleReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid, options);
+  if (!out) throw std::invalid_argument("pull resample: null output buffer");
+  resampleInto(rest.grid, restNodes, posedNodes, tets, outGrid, options, labelKernel(rest, options, background),
+               background, [background](const std::int32_t* v, int n) { return mostCommon(v, n, background); },
+               voiOf(outGrid, options), out, report, start);
 }
 
 LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
@@ -821,16 +921,12 @@ LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes,
                                std::int32_t background, PullResampleReport* report) {
   const auto start = std::chrono::steady_clock::now();
   validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid, options);
-  const Prepared pr = prepare(rest.grid, restNodes, posedNodes, tets, outGrid, options);
   LabelVolume out;
-  out.grid = outGrid;
-  out.data.resize(outGrid.voxelCount());  // zeros; slabs fill other backgrounds in parallel
-  const LabelKernel kernel{rest.data.data(), out.data.data(), rest.grid.dims[0], rest.grid.dims[1],
-                           rest.grid.dims[2], background,
-                           options.restCoverage ? options.restCoverage->data.data() : nullptr,
-                           rest.grid.spacing.maxCoeff()};
-  resamplePasses(pr, tets, kernel, out, background,
-                 [background](const std::int32_t* v, int n) { return mostCommon(v, n, background); }, report, start);
+  out.grid = options.outputExtent ? extentGrid(outGrid, *options.outputExtent) : outGrid;
+  out.data.resize(out.grid.voxelCount());
+  resampleInto(rest.grid, restNodes, posedNodes, tets, outGrid, options, labelKernel(rest, options, background),
+               background, [background](const std::int32_t* v, int n) { return mostCommon(v, n, background); },
+               voiOf(outGrid, options), out.data.data(), report, start);
   return out;
 }
 
@@ -840,27 +936,27 @@ LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes,
   return resampleLabelsPull(rest, restNodes, posedNodes, tets, outGrid, PullResampleOptions{}, background, report);
 }
 
+void resampleIntensityPullInto(const IntensityVolume& rest, const Points& restNodes, const Points& posedNodes,
+                               const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                               float* out, float background, PullResampleReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid, options);
+  if (!out) throw std::invalid_argument("pull resample: null output buffer");
+  resampleInto(rest.grid, restNodes, posedNodes, tets, outGrid, options, intensityKernel(rest, options, background),
+               background, meanOf, voiOf(outGrid, options), out, report, start);
+}
+
 IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points& restNodes,
                                       const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
                                       const PullResampleOptions& options, float background,
                                       PullResampleReport* report) {
   const auto start = std::chrono::steady_clock::now();
   validate(rest.grid, rest.data.size(), restNodes, posedNodes, tets, outGrid, options);
-  const Prepared pr = prepare(rest.grid, restNodes, posedNodes, tets, outGrid, options);
   IntensityVolume out;
-  out.grid = outGrid;
-  out.data.resize(outGrid.voxelCount());
-  const IntensityKernel kernel{rest.data.data(), out.data.data(), rest.grid.dims[0], rest.grid.dims[1],
-                               rest.grid.dims[2], background,
-                               options.restCoverage ? options.restCoverage->data.data() : nullptr,
-                               rest.grid.spacing.maxCoeff()};
-  resamplePasses(pr, tets, kernel, out, background,
-                 [](const float* v, int n) {
-                   double sum = 0;
-                   for (int i = 0; i < n; ++i) sum += v[i];
-                   return float(sum / n);
-                 },
-                 report, start);
+  out.grid = options.outputExtent ? extentGrid(outGrid, *options.outputExtent) : outGrid;
+  out.data.resize(out.grid.voxelCount());
+  resampleInto(rest.grid, restNodes, posedNodes, tets, outGrid, options, intensityKernel(rest, options, background),
+               background, meanOf, voiOf(outGrid, options), out.data.data(), report, start);
   return out;
 }
 

@@ -1,6 +1,9 @@
 #pragma once
 // Posed volume by pulling: every output voxel centre is located in a posed tet, mapped back to rest
 // space with that tet's barycentric coordinates, and the rest volume is sampled there.
+#include <array>
+#include <optional>
+
 #include "image_grid.h"
 #include "tet_mesh.h"
 
@@ -8,6 +11,7 @@ namespace repose {
 
 struct TetBoundary;
 
+/// Counts are over the voxels produced (the sub-extent when one is requested).
 struct PullResampleReport {
   std::size_t outputVoxels = 0;
   std::size_t coveredVoxels = 0;     ///< voxels whose centre lies in some posed tet
@@ -32,7 +36,16 @@ struct PullResampleOptions {
   /// tet's extension does not copy a neighbouring part's interior (e.g. an arm resting against the
   /// torso, then raised), while points just outside its own face may still round to voxels just inside.
   const MaskVolume* restCoverage = nullptr;
+  /// Optional output sub-extent {i0, i1, j0, j1, k0, k1} (inclusive voxel indices of outGrid), e.g. the
+  /// slices a viewer shows: only those voxels are produced, and they equal the same voxels of the full
+  /// resample (the extrapolation's clean-up looks a few voxels beyond the extent to ensure that). The
+  /// result's grid is extentGrid(outGrid, extent). Unset = the whole grid.
+  std::optional<std::array<int, 6>> outputExtent;
 };
+
+/// The block {i0, i1, j0, j1, k0, k1} (inclusive) of `grid` as a grid of its own: same spacing and
+/// direction, origin at voxel (i0, j0, k0). Throws if the extent is empty or not inside the grid.
+ImageGrid extentGrid(const ImageGrid& grid, const std::array<int, 6>& extent);
 
 /// Output grid: the rest grid's spacing and direction, its lattice extended (by whole voxels, so
 /// unmoved anatomy lands on the same voxel centres) to hold the rest extent and the posed nodes,
@@ -45,10 +58,16 @@ MaskVolume restMeshCoverage(const ImageGrid& restGrid, const Points& restNodes, 
 
 /// Labels: nearest rest voxel; voxels outside the posed mesh (and its extension) are `background`.
 /// restNodes/posedNodes #V by 3, tets #T by 4. Threaded with parallelFor; deterministic (a voxel
-/// covered by several tets takes the sample of the lowest-numbered one).
+/// covered by several tets takes the sample of the lowest-numbered one). Each tet is set up once and
+/// only its own voxel centres are visited: cost O(#tets + voxels written) plus filling the output.
 LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
                                const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
                                std::int32_t background = 0, PullResampleReport* report = nullptr);
+/// Same, written into caller memory: `out` holds the output's voxels (outGrid's, or the sub-extent's),
+/// i fastest; every one of them is written.
+void resampleLabelsPullInto(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
+                            const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                            std::int32_t* out, std::int32_t background = 0, PullResampleReport* report = nullptr);
 /// Without extrapolation.
 LabelVolume resampleLabelsPull(const LabelVolume& rest, const Points& restNodes, const Points& posedNodes,
                                const Tets& tets, const ImageGrid& outGrid, std::int32_t background = 0,
@@ -60,6 +79,10 @@ IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points&
                                       const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
                                       const PullResampleOptions& options, float background,
                                       PullResampleReport* report = nullptr);
+/// Same, written into caller memory (see resampleLabelsPullInto).
+void resampleIntensityPullInto(const IntensityVolume& rest, const Points& restNodes, const Points& posedNodes,
+                               const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                               float* out, float background, PullResampleReport* report = nullptr);
 /// Without extrapolation.
 IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points& restNodes,
                                       const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,

@@ -73,8 +73,16 @@ std::vector<RigidBone> rigidBonesFromMesh(const LabelVolume& rest, const Points&
 }
 
 std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const std::vector<RigidBone>& bones) {
-  if (rest.data.size() != rest.grid.voxelCount() || posed.data.size() != posed.grid.voxelCount())
+  if (posed.data.size() != posed.grid.voxelCount())
     throw std::invalid_argument("rigid bones: volume sizes do not match their grids");
+  return overlayRigidBones(posed.data.data(), posed.grid, rest, bones);
+}
+
+std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,
+                              const std::vector<RigidBone>& bones) {
+  if (rest.data.size() != rest.grid.voxelCount())
+    throw std::invalid_argument("rigid bones: volume sizes do not match their grids");
+  if (!posedData && posedGrid.voxelCount() > 0) throw std::invalid_argument("rigid bones: null posed volume");
   std::int32_t maxLabel = 0;
   for (const auto& b : bones)
     for (auto l : b.labels) maxLabel = std::max(maxLabel, l);
@@ -84,18 +92,31 @@ std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const
     for (auto l : bones[b].labels)
       if (l >= 0) boneOfLabel[std::size_t(l)] = int(b);
   const auto& rd = rest.grid.dims;
+  // Bounding boxes in fixed chunks of slices, in parallel, then merged.
+  const std::size_t nChunks = std::max<std::size_t>(1, std::min<std::size_t>(64, std::size_t(rd[2])));
+  std::vector<std::vector<Eigen::AlignedBox3i>> chunkBox(nChunks, std::vector<Eigen::AlignedBox3i>(bones.size()));
+  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
+    for (std::size_t c = cb; c < ce; ++c) {
+      auto& box = chunkBox[c];
+      for (int k = int(c * std::size_t(rd[2]) / nChunks); k < int((c + 1) * std::size_t(rd[2]) / nChunks); ++k)
+        for (int j = 0; j < rd[1]; ++j) {
+          const std::int32_t* row = rest.data.data() + rest.grid.linearIndex(0, j, k);
+          for (int i = 0; i < rd[0]; ++i) {
+            const std::int32_t l = row[i];
+            if (l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0)
+              box[std::size_t(boneOfLabel[std::size_t(l)])].extend(Eigen::Vector3i(i, j, k));
+          }
+        }
+    }
+  }, 1);
   std::vector<Eigen::AlignedBox3i> restBox(bones.size());
-  for (int k = 0; k < rd[2]; ++k)
-    for (int j = 0; j < rd[1]; ++j)
-      for (int i = 0; i < rd[0]; ++i) {
-        const std::int32_t l = rest.data[rest.grid.linearIndex(i, j, k)];
-        if (l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0)
-          restBox[std::size_t(boneOfLabel[std::size_t(l)])].extend(Eigen::Vector3i(i, j, k));
-      }
+  for (const auto& box : chunkBox)
+    for (std::size_t b = 0; b < bones.size(); ++b)
+      if (!box[b].isEmpty()) restBox[b].extend(box[b]);
   auto isBone = [&](std::int32_t l) { return l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0; };
 
   std::atomic<std::size_t> changed{0};
-  const auto& od = posed.grid.dims;
+  const auto& od = posedGrid.dims;
   for (std::size_t b = 0; b < bones.size(); ++b) {
     if (restBox[b].isEmpty()) continue;
     const Eigen::Isometry3d& G = bones[b].transform;
@@ -106,7 +127,7 @@ std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const
       const Eigen::Vector3d corner((c & 1 ? restBox[b].max().x() + 1.0 : restBox[b].min().x() - 1.0),
                                    (c & 2 ? restBox[b].max().y() + 1.0 : restBox[b].min().y() - 1.0),
                                    (c & 4 ? restBox[b].max().z() + 1.0 : restBox[b].min().z() - 1.0));
-      const Eigen::Vector3d o = posed.grid.physicalToIndex(G * rest.grid.indexToPhysical(corner));
+      const Eigen::Vector3d o = posedGrid.physicalToIndex(G * rest.grid.indexToPhysical(corner));
       lo = lo.cwiseMin(o);
       hi = hi.cwiseMax(o);
     }
@@ -118,20 +139,23 @@ std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const
     if (lo3[0] > hi3[0] || lo3[1] > hi3[1] || lo3[2] > hi3[2]) continue;
     // Output index -> rest continuous index is affine.
     const Eigen::Matrix3d toRest = rest.grid.spacing.cwiseInverse().asDiagonal() * rest.grid.direction.transpose() *
-                                   Ginv.linear() * posed.grid.direction * posed.grid.spacing.asDiagonal();
+                                   Ginv.linear() * posedGrid.direction * posedGrid.spacing.asDiagonal();
     const Eigen::Vector3d restOfOrigin =
-        rest.grid.physicalToIndex(Ginv * posed.grid.indexToPhysical(Eigen::Vector3d::Zero()));
+        rest.grid.physicalToIndex(Ginv * posedGrid.indexToPhysical(Eigen::Vector3d::Zero()));
     parallelFor(std::size_t(hi3[2] - lo3[2] + 1), [&](std::size_t kb, std::size_t ke) {
       std::size_t local = 0;
       for (int k = lo3[2] + int(kb); k < lo3[2] + int(ke); ++k)
         for (int j = lo3[1]; j <= hi3[1]; ++j) {
           Eigen::Vector3d r = restOfOrigin + toRest * Eigen::Vector3d(lo3[0], j, k);
           const Eigen::Vector3d step = toRest.col(0);
+          std::int32_t* outRow = posedData + posedGrid.linearIndex(0, j, k);
           for (int i = lo3[0]; i <= hi3[0]; ++i, r += step) {
-            const long ri = std::lround(r.x()), rj = std::lround(r.y()), rk = std::lround(r.z());
-            const bool inRest = ri >= 0 && rj >= 0 && rk >= 0 && ri < rd[0] && rj < rd[1] && rk < rd[2];
-            const std::int32_t restLabel = inRest ? rest.data[rest.grid.linearIndex(int(ri), int(rj), int(rk))] : 0;
-            std::int32_t& out = posed.data[posed.grid.linearIndex(i, j, k)];
+            // Nearest rest voxel, rounding halves away from zero (as lround): inside iff -0.5 < r < d - 0.5.
+            const bool inRest = r.x() > -0.5 && r.y() > -0.5 && r.z() > -0.5 && r.x() < rd[0] - 0.5 &&
+                                r.y() < rd[1] - 0.5 && r.z() < rd[2] - 0.5;
+            const std::int32_t restLabel =
+                inRest ? rest.data[rest.grid.linearIndex(int(r.x() + 0.5), int(r.y() + 0.5), int(r.z() + 0.5))] : 0;
+            std::int32_t& out = outRow[i];
             const bool restIsThisBone = isBone(restLabel) && boneOfLabel[std::size_t(restLabel)] == int(b);
             const bool outIsThisBone = isBone(out) && boneOfLabel[std::size_t(out)] == int(b);
             std::int32_t value = out;

@@ -26,5 +26,9 @@ std::vector<RigidBone> rigidBonesFromMesh(const LabelVolume& rest, const Points&
 /// bone's label but which lies outside the rigid bone gets the rest tissue there (when it is not
 /// another bone). Threaded over slices. Returns the number of voxels changed.
 std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const std::vector<RigidBone>& bones);
+/// Same on caller memory: posedData holds posedGrid.voxelCount() labels, i fastest. posedGrid may be a
+/// block of the full posed grid (extentGrid), since each voxel is decided on its own.
+std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,
+                              const std::vector<RigidBone>& bones);
 
 }  // namespace repose

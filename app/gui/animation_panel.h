@@ -1,0 +1,68 @@
+#pragma once
+// Motion capture playback: a BVH clip retargeted onto the case's skeleton (default CMU joint map or
+// a map file), a timeline slider, play/pause (in real time: frames are skipped when posing is
+// slower than the clip) and frame steps. Emits the pose of every shown frame.
+#include <memory>
+
+#include <QElapsedTimer>
+#include <QWidget>
+
+#include "pose.h"
+#include "retarget.h"
+#include "skeleton.h"
+
+class QLabel;
+class QPushButton;
+class QSlider;
+class QTimer;
+class QToolButton;
+
+namespace repose {
+
+class AnimationPanel : public QWidget {
+  Q_OBJECT
+public:
+  explicit AnimationPanel(QWidget* parent = nullptr);
+  ~AnimationPanel() override;
+
+  void setSkeleton(const Skeleton& skeleton);  ///< drops the clip
+  /// Loads and retargets a clip; `mapPath` empty = built-in CMU map. Throws std::runtime_error
+  /// naming the file on failure.
+  void loadClip(const QString& bvhPath, const QString& mapPath);
+  bool hasClip() const { return bool(retargeter_); }
+  int frameCount() const;
+  int frame() const;
+  double frameTime() const;
+  Pose pose(int frame) const;
+  QString clipName() const { return clipName_; }
+
+  void setFrame(int frame);
+  void stepFrames(int delta);
+  void play();
+  void pause();
+  bool playing() const;
+  void togglePlay();
+
+signals:
+  void frameChanged(int frame);
+  void playingChanged(bool playing);
+  void loadRequested();
+  void exportRequested();
+
+private:
+  void tick();
+  void updateLabel();
+  std::unique_ptr<BvhRetargeter> retargeter_;
+  Skeleton skeleton_;
+  double frameTime_ = 1.0 / 30;
+  QString clipName_;
+  QSlider* slider_;
+  QToolButton *play_, *back_, *forward_;
+  QPushButton *load_, *export_;
+  QLabel* label_;
+  QTimer* timer_;
+  QElapsedTimer clock_;
+  int playStartFrame_ = 0;
+};
+
+}  // namespace repose

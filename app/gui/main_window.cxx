@@ -1,0 +1,831 @@
+#include "main_window.h"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include <QAction>
+#include <QApplication>
+#include <QCheckBox>
+#include <QCloseEvent>
+#include <QComboBox>
+#include <QDockWidget>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QGroupBox>
+#include <QLabel>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QProgressDialog>
+#include <QPushButton>
+#include <QSlider>
+#include <QSplitter>
+#include <QStackedWidget>
+#include <QStatusBar>
+#include <QVBoxLayout>
+#include <QtConcurrent/QtConcurrentRun>
+#include <vtkDataArray.h>
+#include <vtkImageData.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkRenderWindow.h>
+#include <vtkUnstructuredGrid.h>
+
+#include "animation_panel.h"
+#include "atomic_outputs.h"
+#include "joint_panel.h"
+#include "open_scan_dialog.h"
+#include "pvd_series.h"
+#include "repose_pipeline.h"
+#include "scene_view.h"
+#include "slice_views.h"
+#include "start_page.h"
+#include "vtkReposePosedVolume.h"
+
+namespace repose {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Writes one file through a temporary name in its folder, moved into place when complete.
+void writeAtomically(const QString& path, const std::function<void(const std::string&)>& write) {
+  const std::filesystem::path p(path.toStdString());
+  AtomicOutputs out(p.has_parent_path() ? p.parent_path().string() : ".");
+  write(out.stage(p.filename().string()));
+  out.commit();
+}
+
+const char* kImageFilter = "NIfTI (*.nii.gz *.nii);;NRRD (*.nrrd);;MetaImage (*.mha)";
+
+}  // namespace
+
+MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
+  setWindowTitle("Repose");
+  stack_ = new QStackedWidget(this);
+  start_ = new StartPage(stack_);
+  stack_->addWidget(start_);
+  setCentralWidget(stack_);
+  buildWorkspace();
+  buildMenus();
+  connect(start_, &StartPage::openPhantomRequested, this, [this](const QString& size) { openPhantom(size); });
+  connect(start_, &StartPage::openCaseRequested, this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, "Open a prepared case");
+    if (!dir.isEmpty()) openCase(dir);
+  });
+  connect(start_, &StartPage::openScanRequested, this, [this] {
+    OpenScanDialog dialog(this);
+    if (dialog.exec() == QDialog::Accepted) openScan(dialog.request());
+  });
+  connect(start_, &StartPage::cancelRequested, this, &MainWindow::cancelOpening);
+  connect(&controller_, &PoseController::poseChanged, this, &MainWindow::poseChanged);
+  connect(&controller_, &PoseController::historyChanged, this, [this] {
+    updateActions();
+    if (!controller_.editing()) requestSliceUpdate();
+  });
+  // Full detail and the posed volume once an interaction is over.
+  auto interactionOver = [this] {
+    if (controller_.editing() || animation_->playing()) return;
+    scene_->setInteractive(false);
+    scene_->render();
+    requestSliceUpdate();
+  };
+  connect(&controller_, &PoseController::editFinished, this, interactionOver);
+  connect(animation_, &AnimationPanel::playingChanged, this, interactionOver);
+  connect(&sliceWatcher_, &QFutureWatcher<SliceResult>::finished, this, &MainWindow::sliceUpdateFinished);
+  connect(&relaxWatcher_, &QFutureWatcher<QString>::finished, this, &MainWindow::relaxDone);
+  updateActions();
+  resize(1500, 950);
+}
+
+MainWindow::~MainWindow() {
+  for (PreprocessWorker* w : findChildren<PreprocessWorker*>()) {
+    w->cancel();
+    w->wait();
+  }
+  sliceWatcher_.waitForFinished();
+  relaxWatcher_.waitForFinished();
+}
+
+void MainWindow::closeEvent(QCloseEvent* event) {
+  if (worker_) statusBar()->showMessage("Waiting for the running preprocessing stage to stop…");
+  QMainWindow::closeEvent(event);
+}
+
+void MainWindow::buildWorkspace() {
+  auto* workspace = new QSplitter(Qt::Vertical, stack_);
+  scene_ = new SceneView(workspace);
+  scene_->setMinimumSize(400, 300);
+  slices_ = new SliceViews(workspace);
+  workspace->addWidget(scene_);
+  workspace->addWidget(slices_);
+  workspace->setStretchFactor(0, 3);
+  workspace->setStretchFactor(1, 1);
+  stack_->addWidget(workspace);
+
+  joints_ = new JointPanel(&controller_, this);
+  auto* jointDock = new QDockWidget("Skeleton and pose", this);
+  jointDock->setObjectName("jointDock");
+  jointDock->setWidget(joints_);
+  jointDock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
+  addDockWidget(Qt::LeftDockWidgetArea, jointDock);
+
+  auto* panel = new QWidget(this);
+  auto* layout = new QVBoxLayout(panel);
+  auto* display = new QGroupBox("Display", panel);
+  auto* displayForm = new QFormLayout(display);
+  skinOpacity_ = new QSlider(Qt::Horizontal, display);
+  skinOpacity_->setRange(0, 100);
+  skinOpacity_->setValue(30);
+  displayForm->addRow("Skin opacity:", skinOpacity_);
+  auto* showSkeleton = new QCheckBox("Show skeleton", display);
+  showSkeleton->setChecked(true);
+  displayForm->addRow(showSkeleton);
+  auto* overlay = new QSlider(Qt::Horizontal, display);
+  overlay->setRange(0, 100);
+  overlay->setValue(50);
+  displayForm->addRow("Label overlay:", overlay);
+  layout->addWidget(display);
+  auto* deformation = new QGroupBox("Deformation", panel);
+  auto* form = new QFormLayout(deformation);
+  skinning_ = new QComboBox(deformation);
+  skinning_->addItem("Dual quaternion (DQS)", "dqs");
+  skinning_->addItem("Linear blend (LBS)", "lbs");
+  skinning_->setToolTip("DQS keeps volume at bent joints; LBS is the classic blend (collapses at large angles)");
+  form->addRow("Skinning:", skinning_);
+  relax_ = new QPushButton("Relax soft tissue (FEM)", deformation);
+  relax_->setToolTip("Corotational FEM relaxation of the current pose, bones rigid (Ctrl+F). Runs in the background.");
+  form->addRow(relax_);
+  showBefore_ = new QCheckBox("Show before relaxation (wireframe)", deformation);
+  showBefore_->setChecked(true);
+  form->addRow(showBefore_);
+  relaxLabel_ = new QLabel("Skinning only.", deformation);
+  relaxLabel_->setWordWrap(true);
+  form->addRow(relaxLabel_);
+  layout->addWidget(deformation);
+  layout->addStretch(1);
+  auto* rightDock = new QDockWidget("View and deformation", this);
+  rightDock->setObjectName("rightDock");
+  rightDock->setWidget(panel);
+  rightDock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
+  addDockWidget(Qt::RightDockWidgetArea, rightDock);
+
+  animation_ = new AnimationPanel(this);
+  auto* animDock = new QDockWidget("Motion", this);
+  animDock->setObjectName("motionDock");
+  animDock->setWidget(animation_);
+  animDock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
+  addDockWidget(Qt::BottomDockWidgetArea, animDock);
+  for (QDockWidget* dock : {jointDock, rightDock, animDock}) dock->setVisible(false);
+
+  frameLabel_ = new QLabel(this);
+  sliceLabel_ = new QLabel(this);
+  statusBar()->addPermanentWidget(sliceLabel_);
+  statusBar()->addPermanentWidget(frameLabel_);
+
+  connect(skinOpacity_, &QSlider::valueChanged, this, [this](int v) {
+    scene_->setSkinOpacity(v / 100.0);
+    scene_->render();
+  });
+  connect(showSkeleton, &QCheckBox::toggled, this, [this](bool on) {
+    scene_->setSkeletonVisible(on);
+    scene_->render();
+  });
+  connect(overlay, &QSlider::valueChanged, this, [this](int v) { slices_->setOverlayOpacity(v / 100.0); });
+  connect(skinning_, qOverload<int>(&QComboBox::currentIndexChanged), this,
+          [this] { setSkinning(skinning_->currentData().toString()); });
+  connect(relax_, &QPushButton::clicked, this, &MainWindow::relaxCurrentPose);
+  connect(showBefore_, &QCheckBox::toggled, this, [this](bool on) {
+    scene_->setGhost(on && relaxed_ ? beforeSurfaces_.Get() : nullptr);
+    scene_->render();
+  });
+  connect(scene_, &SceneView::jointPicked, joints_, &JointPanel::setSelectedJoint);
+  connect(joints_, &JointPanel::jointSelected, scene_, &SceneView::setSelectedJoint);
+  connect(scene_, &SceneView::dragStarted, &controller_, [this] { controller_.beginEdit(); });
+  connect(scene_, &SceneView::dragEnded, &controller_, [this] { controller_.endEdit(); });
+  scene_->onDragRotate = [this](int joint, const Eigen::Quaterniond& delta) {
+    if (joint >= 0 && !isRelaxing()) controller_.rotateInWorld(joint, delta);
+  };
+  connect(animation_, &AnimationPanel::frameChanged, this, &MainWindow::showAnimationFrame);
+  connect(animation_, &AnimationPanel::loadRequested, this, [this] {
+    const QString bvh = QFileDialog::getOpenFileName(this, "Load a motion clip", QString(), "BVH motion (*.bvh);;All files (*)");
+    if (bvh.isEmpty()) return;
+    const auto answer = QMessageBox::question(
+        this, "Joint map", "Use a joint map file (BVH joint -> skeleton joint)?\nNo = the built-in CMU map.",
+        QMessageBox::Yes | QMessageBox::No | QMessageBox::Cancel, QMessageBox::No);
+    if (answer == QMessageBox::Cancel) return;
+    QString map;
+    if (answer == QMessageBox::Yes) {
+      map = QFileDialog::getOpenFileName(this, "Joint map", QString(), "Joint map (*.json);;All files (*)");
+      if (map.isEmpty()) return;
+    }
+    loadClip(bvh, map);
+  });
+  connect(animation_, &AnimationPanel::exportRequested, this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, "Export the animation into a folder");
+    if (!dir.isEmpty()) exportAnimation(dir);
+  });
+}
+
+void MainWindow::buildMenus() {
+  auto add = [this](QMenu* menu, const QString& text, const QKeySequence& key, std::function<void()> fn) {
+    QAction* a = menu->addAction(text);
+    if (!key.isEmpty()) a->setShortcut(key);
+    connect(a, &QAction::triggered, this, [fn] { fn(); });
+    return a;
+  };
+  QMenu* file = menuBar()->addMenu("&File");
+  add(file, "Open built-in &phantom", QKeySequence("Ctrl+Shift+P"), [this] { openPhantom(start_->phantomSize()); });
+  add(file, "&Open prepared case…", QKeySequence::Open, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, "Open a prepared case");
+    if (!dir.isEmpty()) openCase(dir);
+  });
+  add(file, "Open &scan…", QKeySequence("Ctrl+Shift+O"), [this] {
+    OpenScanDialog dialog(this);
+    if (dialog.exec() == QDialog::Accepted) openScan(dialog.request());
+  });
+  loadCt_ = add(file, "Load &CT for this case…", QKeySequence(), [this] {
+    const QString p = QFileDialog::getOpenFileName(this, "CT on the label grid", QString(),
+                                                   "Images (*.nii *.nii.gz *.nrrd *.nhdr *.mha *.mhd)");
+    if (!p.isEmpty()) loadRestImage(p);
+  });
+  file->addSeparator();
+  loadPose_ = add(file, "&Load pose…", QKeySequence("Ctrl+L"), [this] {
+    const QString p = QFileDialog::getOpenFileName(this, "Load pose", QString(), "Pose (*.json)");
+    if (!p.isEmpty()) loadPose(p);
+  });
+  savePose_ = add(file, "&Save pose…", QKeySequence::Save, [this] {
+    const QString p = askSavePath("Save pose", "pose.json", "Pose (*.json)");
+    if (!p.isEmpty()) savePose(p);
+  });
+  file->addSeparator();
+  QMenu* exportMenu = file->addMenu("&Export");
+  export_[0] = add(exportMenu, "Posed &label volume…", QKeySequence("Ctrl+E"), [this] {
+    const QString p = askSavePath("Export posed label volume", "posed_labels.nii.gz", kImageFilter);
+    if (!p.isEmpty()) exportPosedLabels(p);
+  });
+  export_[1] = add(exportMenu, "Posed &CT…", QKeySequence("Ctrl+Shift+E"), [this] {
+    const QString p = askSavePath("Export posed CT", "posed_image.nii.gz", kImageFilter);
+    if (!p.isEmpty()) exportPosedImage(p);
+  });
+  export_[2] = add(exportMenu, "Posed tet &mesh (.vtu)…", QKeySequence(), [this] {
+    const QString p = askSavePath("Export posed mesh", "posed_mesh.vtu", "VTK mesh (*.vtu)");
+    if (!p.isEmpty()) exportPosedMesh(p);
+  });
+  export_[3] = add(exportMenu, "Posed &surfaces (.vtp)…", QKeySequence(), [this] {
+    const QString p = askSavePath("Export posed surfaces", "posed_surfaces.vtp", "VTK surfaces (*.vtp)");
+    if (!p.isEmpty()) exportPosedSurfaces(p);
+  });
+  export_[4] = add(exportMenu, "&Animation series (.pvd)…", QKeySequence(), [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, "Export the animation into a folder");
+    if (!dir.isEmpty()) exportAnimation(dir);
+  });
+  export_[5] = add(file, "Screens&hot of the 3D view…", QKeySequence("F12"), [this] {
+    const QString p = askSavePath("Screenshot", "repose.png", "PNG image (*.png)");
+    if (!p.isEmpty()) exportScreenshot(p);
+  });
+  file->addSeparator();
+  closeCase_ = add(file, "&Close case", QKeySequence::Close, [this] { closeCase(); });
+  add(file, "&Quit", QKeySequence::Quit, [this] { close(); });
+
+  QMenu* edit = menuBar()->addMenu("&Edit");
+  undo_ = add(edit, "&Undo pose change", QKeySequence::Undo, [this] { controller_.undo(); });
+  redo_ = add(edit, "&Redo pose change", QKeySequence("Ctrl+Shift+Z"), [this] { controller_.redo(); });
+  redo_->setShortcuts({QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")});
+  add(edit, "Reset &joint", QKeySequence("Ctrl+R"), [this] {
+    if (joints_->selectedJoint() >= 0) controller_.resetJoint(joints_->selectedJoint());
+  });
+  add(edit, "Reset &all joints", QKeySequence("Ctrl+Shift+R"), [this] { controller_.resetAll(); });
+  add(edit, "Relax soft tissue (&FEM)", QKeySequence("Ctrl+F"), [this] { relaxCurrentPose(); });
+
+  QMenu* view = menuBar()->addMenu("&View");
+  add(view, "&Reset camera", QKeySequence("Ctrl+0"), [this] {
+    scene_->resetCamera();
+    scene_->render();
+  });
+
+  QMenu* motion = menuBar()->addMenu("&Motion");
+  add(motion, "&Load motion (BVH)…", QKeySequence("Ctrl+B"), [this] { emit animation_->loadRequested(); });
+  add(motion, "&Play / pause", QKeySequence(Qt::Key_Space), [this] { animation_->togglePlay(); });
+  add(motion, "&Next frame", QKeySequence("Ctrl+Right"), [this] { animation_->stepFrames(1); });
+  add(motion, "P&revious frame", QKeySequence("Ctrl+Left"), [this] { animation_->stepFrames(-1); });
+
+  QMenu* help = menuBar()->addMenu("&Help");
+  add(help, "&Controls", QKeySequence::HelpContents, [this] {
+    QMessageBox::information(
+        this, "Controls",
+        "3D view: left-drag on a bone rotates its joint; left-drag elsewhere turns the camera; right-drag "
+        "zooms; middle-drag pans.\nSlice views: click moves the linked cursor; left-drag sets window/level; "
+        "sliders choose the slices.\nThe slice views show the posed volume when a drag ends.");
+  });
+}
+
+QString MainWindow::askSavePath(const QString& title, const QString& name, const QString& filter) {
+  return QFileDialog::getSaveFileName(this, title, name, filter);
+}
+
+void MainWindow::showError(const QString& message) {
+  QString line = message;
+  line.replace('\n', ' ');
+  statusBar()->showMessage(line, 10000);
+  if (errorHandler_)
+    errorHandler_(line);
+  else
+    QMessageBox::critical(this, "Repose", line);
+}
+
+bool MainWindow::guarded(const std::function<void()>& action) {
+  try {
+    action();
+    return true;
+  } catch (const std::exception& e) {
+    QApplication::restoreOverrideCursor();
+    showError(e.what());
+  } catch (...) {
+    QApplication::restoreOverrideCursor();
+    showError("unexpected error");
+  }
+  return false;
+}
+
+void MainWindow::updateActions() {
+  const bool ready = hasCase() && !isRelaxing();
+  undo_->setEnabled(ready && controller_.canUndo());
+  redo_->setEnabled(ready && controller_.canRedo());
+  for (QAction* a : {savePose_, loadPose_, closeCase_, loadCt_}) a->setEnabled(ready);
+  for (QAction* a : export_) a->setEnabled(ready);
+  export_[4]->setEnabled(ready && animation_->hasClip());
+}
+
+// --- opening ---------------------------------------------------------------------------------
+
+void MainWindow::openPhantom(const QString& size, const PrepareSettings& settings) {
+  OpenRequest r;
+  r.kind = OpenRequest::Phantom;
+  r.phantomSize = size;
+  r.settings = settings;
+  startWorker(r);
+}
+
+void MainWindow::openCase(const QString& caseDir) {
+  OpenRequest r;
+  r.kind = OpenRequest::Case;
+  r.caseDir = caseDir;
+  startWorker(r);
+}
+
+void MainWindow::openScan(const OpenRequest& request) { startWorker(request); }
+
+void MainWindow::startWorker(const OpenRequest& request) {
+  if (worker_) return showError("a case is already being opened; cancel it first");
+  worker_ = new PreprocessWorker(request, this);
+  connect(worker_, &PreprocessWorker::progress, start_, &StartPage::setProgress);
+  connect(worker_, &QThread::finished, this, &MainWindow::workerFinished);
+  stack_->setCurrentWidget(start_);
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) dock->setVisible(false);
+  start_->setBusy(true);
+  worker_->start();
+}
+
+void MainWindow::cancelOpening() {
+  if (!worker_) return;
+  // The running stage (TetGen) cannot be interrupted: the worker stops at the next stage and
+  // deletes itself; the window is free at once.
+  PreprocessWorker* w = worker_;
+  worker_ = nullptr;
+  w->cancel();
+  disconnect(w, nullptr, this, nullptr);
+  disconnect(w, nullptr, start_, nullptr);
+  connect(w, &QThread::finished, w, &QObject::deleteLater);
+  start_->setBusy(false);
+  statusBar()->showMessage("Opening cancelled", 5000);
+  if (hasCase()) {
+    stack_->setCurrentIndex(1);
+    for (QDockWidget* dock : findChildren<QDockWidget*>()) dock->setVisible(true);
+  }
+}
+
+void MainWindow::workerFinished() {
+  PreprocessWorker* w = worker_;
+  worker_ = nullptr;
+  if (!w) return;
+  w->deleteLater();
+  start_->setBusy(false);
+  if (w->cancelled()) return;
+  if (!w->error().isEmpty() || !w->result().pipeline) {
+    const QString message = w->error().isEmpty() ? "opening failed" : w->error();
+    showError(message);
+    emit openFailed(message);
+    if (hasCase()) {
+      stack_->setCurrentIndex(1);
+      for (QDockWidget* dock : findChildren<QDockWidget*>()) dock->setVisible(true);
+    }
+    return;
+  }
+  if (!guarded([&] { installCase(w->result()); })) {
+    closeCase();
+    emit openFailed("cannot show the case");
+    return;
+  }
+  emit caseOpened();
+}
+
+void MainWindow::installCase(const OpenResult& result) {
+  sliceWatcher_.waitForFinished();
+  relaxWatcher_.waitForFinished();
+  ++caseGeneration_;
+  pipeline_ = result.pipeline;
+  table_ = result.table;
+  restImage_ = result.image;
+  title_ = result.title;
+  relaxed_ = false;
+  beforeSurfaces_ = nullptr;
+  const Skeleton skeleton = parseSkeletonJson(pipeline_->skeletonJson());
+  boneLabels_.clear();
+  for (const Joint& j : skeleton.joints) boneLabels_.insert(boneLabels_.end(), j.labels.begin(), j.labels.end());
+  pipeline_->setSkinningMethod(skinning_->currentData().toString().toStdString());
+  relaxLabel_->setText("Skinning only.");
+  stack_->setCurrentIndex(1);
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) dock->setVisible(true);
+  scene_->setCase(pipeline_->restSurfaces(), skeleton, table_);
+  scene_->setSkinOpacity(skinOpacity_->value() / 100.0);
+  controller_.setSkeleton(skeleton);  // poses (rest) and renders through poseChanged
+  joints_->rebuild();
+  animation_->setSkeleton(skeleton);
+  slices_->setVolumes(pipeline_->restLabels(), restImage_, table_, boneLabels_);
+  slicesDirty_ = false;
+  setWindowTitle("Repose — " + title_);
+  statusBar()->showMessage(QString("Opened %1: %2 nodes, %3 tets, %4 surface triangles")
+                               .arg(title_)
+                               .arg(pipeline_->restMesh()->GetNumberOfPoints())
+                               .arg(pipeline_->restMesh()->GetNumberOfCells())
+                               .arg(pipeline_->restSurfaces()->GetNumberOfCells()),
+                           10000);
+  updateActions();
+  scene_->render();
+}
+
+void MainWindow::closeCase() {
+  sliceWatcher_.waitForFinished();
+  relaxWatcher_.waitForFinished();
+  ++caseGeneration_;
+  pipeline_.reset();
+  restImage_ = nullptr;
+  scene_->clearCase();
+  slices_->clear();
+  animation_->setSkeleton(Skeleton());
+  controller_.setSkeleton(Skeleton());
+  joints_->rebuild();
+  stack_->setCurrentWidget(start_);
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) dock->setVisible(false);
+  setWindowTitle("Repose");
+  frameLabel_->clear();
+  sliceLabel_->clear();
+  updateActions();
+}
+
+// --- posing ----------------------------------------------------------------------------------
+
+void MainWindow::poseChanged() {
+  if (isRelaxing()) posedWhileRelaxing_ = true;
+  if (!pipeline_ || isRelaxing() || controller_.jointCount() == 0) return;
+  if (relaxed_) dropRelaxation();
+  guarded([&] {
+    const auto t0 = Clock::now();
+    pipeline_->setPose(controller_.pose());
+    pipeline_->posedMesh();
+    const auto t1 = Clock::now();
+    vtkPolyData* posed = pipeline_->posedSurfaces();
+    const auto t2 = Clock::now();
+    scene_->setInteractive(controller_.editing() || animation_->playing());
+    scene_->updatePose(posed, controller_.globalTransforms());
+    scene_->render();
+    timing_.skinning = std::chrono::duration<double>(t1 - t0).count();
+    timing_.surfaces = std::chrono::duration<double>(t2 - t1).count();
+    timing_.render = since(t2);
+    timing_.total = since(t0);
+    frameLabel_->setText(QString("Pose update %1 ms (%2 fps): skinning %3, surfaces %4, render %5 ms")
+                             .arg(timing_.total * 1e3, 0, 'f', 1)
+                             .arg(1.0 / std::max(timing_.total, 1e-6), 0, 'f', 0)
+                             .arg(timing_.skinning * 1e3, 0, 'f', 1)
+                             .arg(timing_.surfaces * 1e3, 0, 'f', 1)
+                             .arg(timing_.render * 1e3, 0, 'f', 1) +
+                         (scene_->interactive() && scene_->interactiveTriangles() > 0
+                              ? QString(" (drag view: %1 k triangles)").arg(scene_->interactiveTriangles() / 1000)
+                              : QString()));
+  });
+  slicesDirty_ = true;
+  if (!controller_.editing() && !animation_->playing()) requestSliceUpdate();
+}
+
+double MainWindow::simulateDrag(double dx, double dy) {
+  const int joint = scene_->selectedJoint();
+  if (joint < 0 || !scene_->onDragRotate) return 0;
+  const auto t0 = Clock::now();
+  scene_->onDragRotate(joint, scene_->dragRotation(dx, dy));
+  scene_->renderWindow()->WaitForCompletion();
+  return since(t0);
+}
+
+void MainWindow::showAnimationFrame(int frame) {
+  if (!pipeline_ || !animation_->hasClip()) return;
+  guarded([&] { controller_.setPose(animation_->pose(frame), false); });
+}
+
+bool MainWindow::setSkinning(const QString& method) {
+  return guarded([&] {
+    if (!pipeline_) return;
+    if (isRelaxing()) throw std::runtime_error("wait for the FEM relaxation to finish");
+    pipeline_->setSkinningMethod(method.toStdString());
+    const int index = skinning_->findData(method);
+    if (index >= 0 && index != skinning_->currentIndex()) {
+      QSignalBlocker block(skinning_);
+      skinning_->setCurrentIndex(index);
+    }
+    if (relaxed_) dropRelaxation();
+    // Re-pose with the new method (the pose itself is unchanged).
+    poseChanged();
+  });
+}
+
+// --- posed volumes in the background ---------------------------------------------------------
+
+void MainWindow::requestSliceUpdate() {
+  if (!pipeline_) return;
+  slicesDirty_ = true;
+  // The FEM thread owns the pipeline while it runs; relaxDone() asks again.
+  if (!sliceWatcher_.isRunning() && !isRelaxing()) startSliceUpdate();
+}
+
+void MainWindow::startSliceUpdate() {
+  slicesDirty_ = false;
+  const Pose pose = controller_.pose();
+  const bool rest = pose.rotations.empty() && pose.translation.isZero() && !relaxed_;
+  auto labels = vtkSmartPointer<vtkImageData>::New();
+  labels->ShallowCopy(pipeline_->restLabels());
+  auto image = restImage_ ? vtkSmartPointer<vtkImageData>::New() : nullptr;
+  if (image) image->ShallowCopy(restImage_);
+  auto restMesh = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  restMesh->ShallowCopy(pipeline_->restMesh());
+  vtkSmartPointer<vtkUnstructuredGrid> posed;
+  if (!rest) {
+    vtkUnstructuredGrid* current = nullptr;
+    try {
+      current = pipeline_->posedMesh();
+    } catch (const std::exception&) {
+      return;
+    }
+    posed = vtkSmartPointer<vtkUnstructuredGrid>::New();
+    posed->ShallowCopy(current);
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    points->DeepCopy(current->GetPoints());
+    posed->SetPoints(points);
+  }
+  const int generation = caseGeneration_;
+  sliceLabel_->setText("Updating the slice views…");
+  sliceWatcher_.setFuture(QtConcurrent::run([=]() -> SliceResult {
+    SliceResult r;
+    r.generation = generation;
+    const auto t0 = Clock::now();
+    try {
+      if (rest) {
+        r.labels = labels;
+        r.image = image;
+        return r;
+      }
+      auto resample = [&](vtkImageData* volume, bool nearest, double background) {
+        auto filter = vtkSmartPointer<vtkReposePosedVolume>::New();
+        filter->SetInputData(0, volume);
+        filter->SetRestMeshData(restMesh);
+        filter->SetPosedMeshData(posed);
+        if (nearest)
+          filter->SetInterpolationToNearest();
+        else
+          filter->SetInterpolationToLinear();
+        filter->SetBackgroundValue(background);
+        updateOrThrow(filter, "posed volume for the slice views");
+        auto out = vtkSmartPointer<vtkImageData>::New();
+        out->ShallowCopy(filter->GetOutput());
+        return out;
+      };
+      r.labels = resample(labels, true, 0);
+      if (image) {
+        double range[2];
+        image->GetPointData()->GetScalars()->GetRange(range);
+        r.image = resample(image, false, range[0]);
+      }
+    } catch (const std::exception& e) {
+      r.error = e.what();
+    }
+    r.seconds = since(t0);
+    return r;
+  }));
+}
+
+void MainWindow::sliceUpdateFinished() {
+  const SliceResult r = sliceWatcher_.result();
+  if (r.generation != caseGeneration_ || !pipeline_) return;
+  if (!r.error.isEmpty()) {
+    sliceLabel_->setText("Slice views not updated");
+    showError(r.error);
+    return;
+  }
+  slices_->setVolumes(r.labels, r.image, table_, boneLabels_);
+  sliceLabel_->setText(r.seconds > 0 ? QString("Posed volume %1 s").arg(r.seconds, 0, 'f', 2) : QString());
+  if (slicesDirty_ && !controller_.editing() && !animation_->playing() && !isRelaxing()) startSliceUpdate();
+}
+
+// --- FEM relaxation --------------------------------------------------------------------------
+
+void MainWindow::relaxCurrentPose() {
+  if (!pipeline_ || isRelaxing()) return;
+  guarded([&] {
+    animation_->pause();
+    beforeSurfaces_ = vtkSmartPointer<vtkPolyData>::New();
+    beforeSurfaces_->DeepCopy(pipeline_->posedSurfaces());
+    pipeline_->setRelaxation(true);
+    relaxLabel_->setText("Relaxing (FEM)…");
+    relaxing_ = true;
+    posedWhileRelaxing_ = false;
+    relaxGeneration_ = caseGeneration_;
+    for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, relax_, skinning_}) w->setEnabled(false);
+    std::shared_ptr<Pipeline> p = pipeline_;
+    relaxWatcher_.setFuture(QtConcurrent::run([p]() -> QString {
+      try {
+        p->posedSurfaces();
+        return QString();
+      } catch (const std::exception& e) {
+        return QString::fromStdString(e.what());
+      }
+    }));
+    updateActions();
+  });
+}
+
+void MainWindow::relaxDone() {
+  relaxing_ = false;
+  for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, relax_, skinning_}) w->setEnabled(true);
+  const QString error = relaxWatcher_.result();
+  updateActions();
+  if (!pipeline_ || relaxGeneration_ != caseGeneration_) return;  // the case was closed meanwhile
+  if (!error.isEmpty()) {
+    guarded([&] { pipeline_->setRelaxation(false); });
+    relaxLabel_->setText("Skinning only.");
+    showError(error);
+    return;
+  }
+  relaxed_ = true;
+  relaxSummary_ = QString::fromStdString(pipeline_->relaxationSummary());
+  relaxLabel_->setText("After relaxation (solid) vs before (wireframe).\n" + relaxSummary_);
+  guarded([&] {
+    scene_->updatePose(pipeline_->posedSurfaces(), controller_.globalTransforms());
+    scene_->setGhost(showBefore_->isChecked() ? beforeSurfaces_.Get() : nullptr);
+    scene_->render();
+  });
+  requestSliceUpdate();
+  emit relaxFinished();
+  // A pose set while the solver ran (a loaded pose) wins over the relaxed result.
+  if (posedWhileRelaxing_) poseChanged();
+}
+
+void MainWindow::dropRelaxation() {
+  relaxed_ = false;
+  guarded([&] { pipeline_->setRelaxation(false); });
+  scene_->setGhost(nullptr);
+  relaxLabel_->setText("Skinning only (the pose changed since the relaxation).");
+}
+
+// --- files -----------------------------------------------------------------------------------
+
+bool MainWindow::savePose(const QString& path) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    writeAtomically(path, [&](const std::string& tmp) { writeTextFile(tmp, poseToJson(controller_.pose())); });
+    statusBar()->showMessage("Pose saved to " + path, 5000);
+  });
+}
+
+bool MainWindow::loadPose(const QString& path) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    const std::string p = path.toStdString();
+    Pose pose;
+    try {
+      pose = parsePoseJson(readTextFile(p));
+      validatePose(pose, controller_.skeleton());
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(p + ": " + e.what());
+    }
+    animation_->pause();
+    controller_.setPose(pose);
+  });
+}
+
+bool MainWindow::loadRestImage(const QString& path) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    auto image = readIntensityImage(path.toStdString());
+    pipeline_->setRestImage(image, path.toStdString());
+    restImage_ = image;
+    requestSliceUpdate();
+  });
+}
+
+bool MainWindow::exportPosedLabels(const QString& path) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    QApplication::setOverrideCursor(Qt::WaitCursor);
+    writeAtomically(path, [&](const std::string& tmp) { writeImage(pipeline_->posedLabels(), tmp); });
+    QApplication::restoreOverrideCursor();
+    statusBar()->showMessage("Posed label volume written to " + path, 5000);
+  });
+}
+
+bool MainWindow::exportPosedImage(const QString& path) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    if (!restImage_) throw std::runtime_error("no CT for this case (File > Load CT for this case)");
+    QApplication::setOverrideCursor(Qt::WaitCursor);
+    writeAtomically(path, [&](const std::string& tmp) { writeImage(pipeline_->posedImage(), tmp); });
+    QApplication::restoreOverrideCursor();
+    statusBar()->showMessage("Posed CT written to " + path, 5000);
+  });
+}
+
+bool MainWindow::exportPosedMesh(const QString& path) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    writeAtomically(path, [&](const std::string& tmp) { writeMesh(pipeline_->posedMesh(), tmp); });
+    statusBar()->showMessage("Posed mesh written to " + path, 5000);
+  });
+}
+
+bool MainWindow::exportPosedSurfaces(const QString& path) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    writeAtomically(path, [&](const std::string& tmp) { writeSurfaces(pipeline_->posedSurfaces(), tmp); });
+    statusBar()->showMessage("Posed surfaces written to " + path, 5000);
+  });
+}
+
+bool MainWindow::exportScreenshot(const QString& path) {
+  return guarded([&] {
+    writeAtomically(path, [&](const std::string& tmp) { scene_->saveScreenshot(tmp); });
+    statusBar()->showMessage("Screenshot written to " + path, 5000);
+  });
+}
+
+bool MainWindow::loadClip(const QString& bvhPath, const QString& mapPath) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    animation_->loadClip(bvhPath, mapPath);
+    updateActions();
+  });
+}
+
+bool MainWindow::exportAnimation(const QString& dir, int step) {
+  return guarded([&] {
+    if (!pipeline_) throw std::runtime_error("no case open");
+    if (!animation_->hasClip()) throw std::runtime_error("no motion loaded (Motion > Load motion)");
+    animation_->pause();
+    const int frames = animation_->frameCount();
+    QProgressDialog progress("Writing the animation series…", "Cancel", 0, frames, this);
+    progress.setWindowModality(Qt::WindowModal);
+    progress.setMinimumDuration(500);
+    AtomicOutputs out(dir.toStdString());
+    makeDirectories(out.stage("frames"));
+    std::vector<PvdEntry> entries;
+    bool cancelled = false;
+    try {
+      for (int f = 0; f < frames; f += std::max(1, step)) {
+        progress.setValue(f);
+        if (progress.wasCanceled()) {
+          cancelled = true;
+          break;
+        }
+        pipeline_->setPose(animation_->pose(f));
+        const double time = f * animation_->frameTime();
+        char name[64];
+        std::snprintf(name, sizeof(name), "frames/mesh_%05d.vtu", f);
+        writeMesh(pipeline_->posedMesh(), out.stage(name));
+        entries.push_back({time, 0, name});
+        std::snprintf(name, sizeof(name), "frames/surfaces_%05d.vtp", f);
+        writeSurfaces(pipeline_->posedSurfaces(), out.stage(name));
+        entries.push_back({time, 1, name});
+      }
+    } catch (...) {
+      pipeline_->setPose(controller_.pose());
+      throw;
+    }
+    pipeline_->setPose(controller_.pose());
+    progress.setValue(frames);
+    if (cancelled) return;  // the temporary folder is removed
+    writeTextFile(out.stage("animation.pvd"), pvdText(entries));
+    out.commit();
+    statusBar()->showMessage(QString("%1 frames written to %2/animation.pvd").arg(entries.size() / 2).arg(dir), 8000);
+  });
+}
+
+}  // namespace repose

@@ -1,0 +1,160 @@
+#pragma once
+// The Repose main window: start screen, then the workspace (joint panel left, 3D view centre,
+// slice views below it, deformation panel right, motion timeline at the bottom). Drives one
+// repose::Pipeline: posing on the UI thread (fast), preprocessing, posed-volume resampling and
+// FEM relaxation in the background.
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <QFutureWatcher>
+#include <QMainWindow>
+#include <vtkImageData.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+
+#include "label_table.h"
+#include "pose_controller.h"
+#include "preprocess_worker.h"
+
+class QAction;
+class QCheckBox;
+class QComboBox;
+class QLabel;
+class QPushButton;
+class QSlider;
+class QStackedWidget;
+
+namespace repose {
+
+class AnimationPanel;
+class JointPanel;
+class Pipeline;
+class SceneView;
+class SliceViews;
+class StartPage;
+
+/// Times of the last pose update (seconds).
+struct FrameTiming {
+  double skinning = 0, surfaces = 0, render = 0, total = 0;
+};
+
+class MainWindow : public QMainWindow {
+  Q_OBJECT
+public:
+  explicit MainWindow(QWidget* parent = nullptr);
+  ~MainWindow() override;
+
+  // --- opening (asynchronous; caseOpened() or openFailed() follows) --------------------------
+  void openPhantom(const QString& size, const PrepareSettings& settings = {});
+  void openCase(const QString& caseDir);
+  void openScan(const OpenRequest& request);
+  void cancelOpening();
+  bool isOpening() const { return worker_ != nullptr; }
+  bool hasCase() const { return bool(pipeline_); }
+  void closeCase();
+
+  // --- pose files and exports (throw nothing: errors go to the error handler) ----------------
+  bool savePose(const QString& path);
+  bool loadPose(const QString& path);
+  bool loadRestImage(const QString& path);
+  bool exportPosedLabels(const QString& path);
+  bool exportPosedImage(const QString& path);
+  bool exportPosedMesh(const QString& path);
+  bool exportPosedSurfaces(const QString& path);
+  bool exportScreenshot(const QString& path);
+  /// The loaded clip as a ParaView series: DIR/animation.pvd + frames/ (mesh and surfaces).
+  bool exportAnimation(const QString& dir, int step = 1);
+  bool loadClip(const QString& bvhPath, const QString& mapPath = QString());
+  /// Skinning "dqs" | "lbs".
+  bool setSkinning(const QString& method);
+  /// FEM relaxation of the current pose in the background; relaxFinished() follows.
+  void relaxCurrentPose();
+  bool isRelaxing() const { return relaxing_; }
+  QString relaxationSummary() const { return relaxSummary_; }
+
+  // --- state for tests and the benchmark -----------------------------------------------------
+  PoseController* controller() { return &controller_; }
+  Pipeline* pipeline() { return pipeline_.get(); }
+  SceneView* scene() { return scene_; }
+  SliceViews* slices() { return slices_; }
+  JointPanel* jointPanel() { return joints_; }
+  AnimationPanel* animation() { return animation_; }
+  const FrameTiming& lastFrameTiming() const { return timing_; }
+  /// True while the slice views wait for a background resampling of the posed volumes.
+  bool slicesPending() const { return sliceWatcher_.isRunning() || slicesDirty_; }
+  /// Replaces the error dialog (tests record the one-line messages instead).
+  void setErrorHandler(std::function<void(const QString&)> handler) { errorHandler_ = std::move(handler); }
+  /// Rotates the selected joint as a mouse drag of (dx, dy) pixels does; returns the frame time.
+  double simulateDrag(double dx, double dy);
+
+signals:
+  void caseOpened();
+  void openFailed(const QString& message);
+  void relaxFinished();
+
+protected:
+  void closeEvent(QCloseEvent* event) override;
+
+private:
+  void buildMenus();
+  void buildWorkspace();
+  void startWorker(const OpenRequest& request);
+  void workerFinished();
+  void installCase(const OpenResult& result);
+  void poseChanged();
+  void requestSliceUpdate();
+  void startSliceUpdate();
+  void sliceUpdateFinished();
+  void relaxDone();
+  void dropRelaxation();
+  void showAnimationFrame(int frame);
+  void updateActions();
+  void showError(const QString& message);
+  bool guarded(const std::function<void()>& action);
+  QString askSavePath(const QString& title, const QString& name, const QString& filter);
+
+  PoseController controller_;
+  std::shared_ptr<Pipeline> pipeline_;
+  LabelTable table_;
+  std::vector<int> boneLabels_;
+  vtkSmartPointer<vtkImageData> restImage_;
+  QString title_;
+  PreprocessWorker* worker_ = nullptr;
+  FrameTiming timing_;
+  bool relaxed_ = false;
+  bool relaxing_ = false;  // from relaxCurrentPose() until relaxDone() has run
+  bool posedWhileRelaxing_ = false;
+  int relaxGeneration_ = 0;
+  QString relaxSummary_;
+  bool slicesDirty_ = false;
+  int caseGeneration_ = 0;
+  std::function<void(const QString&)> errorHandler_;
+
+  struct SliceResult {
+    vtkSmartPointer<vtkImageData> labels, image;
+    int generation = 0;
+    double seconds = 0;
+    QString error;
+  };
+  QFutureWatcher<SliceResult> sliceWatcher_;
+  QFutureWatcher<QString> relaxWatcher_;
+
+  QStackedWidget* stack_;
+  StartPage* start_;
+  SceneView* scene_;
+  SliceViews* slices_;
+  JointPanel* joints_;
+  AnimationPanel* animation_;
+  QComboBox* skinning_;
+  QPushButton* relax_;
+  QCheckBox* showBefore_;
+  QLabel* relaxLabel_;
+  QSlider* skinOpacity_;
+  QLabel* frameLabel_;
+  QLabel* sliceLabel_;
+  QAction *undo_, *redo_, *savePose_, *loadPose_, *export_[6], *closeCase_, *loadCt_;
+  vtkSmartPointer<vtkPolyData> beforeSurfaces_;
+};
+
+}  // namespace repose

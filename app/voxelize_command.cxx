@@ -1,0 +1,313 @@
+#include "voxelize_command.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <vtkCellArray.h>
+#include <vtkIdList.h>
+#include <vtkImageData.h>
+#include <vtkIntArray.h>
+#include <vtkMatrix3x3.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkUnstructuredGrid.h>
+
+#include "atomic_outputs.h"
+#include "auto_rig.h"
+#include "label_table.h"
+#include "mesh_io.h"
+#include "mesh_voxelizer.h"
+#include "repose_pipeline.h"
+#include "skeleton.h"
+
+namespace repose {
+
+const char* kVoxelizeUsage =
+    "usage: repose voxelize --skin MESH --bone NAME=MESH ... [--tissue NAME=MESH ...] [--bones-split PREFIX=MESH ...]\n"
+    "                       --voxel MM --out labels.nii.gz [--skeleton-out skeleton.json] [options]\n"
+    "  Turns closed surfaces (.obj, .stl, .ply, .vtp, .vtk) into one label volume with OpenVDB level sets: the\n"
+    "  skin's interior is soft tissue (label 1), each bone gets its own label (2, 3, ... in the order given),\n"
+    "  then each tissue; bones win over tissues over skin. The label table is written beside the output\n"
+    "  (labels.nii.gz -> labels.tsv, as 'repose prepare --label-table' reads it). The grid is axis-aligned\n"
+    "  (LPS, identity direction) with cubic voxels, fitted to the skin's bounds. Mesh coordinates are taken\n"
+    "  as LPS millimetres (scaled by --unit-mm). Holes of about a voxel are bridged; a surface whose holes let\n"
+    "  the outside in is an error; bones partly outside the skin are kept and reported.\n"
+    "  --skin MESH             the body's outer surface (required)\n"
+    "  --skin-name NAME        label name of the skin's interior (default soft_tissue)\n"
+    "  --bone NAME=MESH        a bone surface (repeatable); names like femur_left, tibia_left, humerus_right\n"
+    "                          let --skeleton-out and 'repose prepare --skeleton auto' find the joints\n"
+    "  --bones-split PREFIX=MESH  every connected piece of MESH is a bone PREFIX_1, PREFIX_2, ... (file order)\n"
+    "  --tissue NAME=MESH      another soft tissue (repeatable), e.g. muscle=muscle.stl\n"
+    "  --voxel MM              voxel size (required unless --reference)\n"
+    "  --reference IMAGE       use this image's grid (origin, spacing, direction, size) instead\n"
+    "  --out FILE              label volume (.nii.gz, .nii, .nrrd, .mha)\n"
+    "  --unit-mm MM            millimetres per mesh unit (default 1; e.g. 10 for centimetres)\n"
+    "  --padding VOXELS        background voxels around the skin (default 2)\n"
+    "  --max-voxels N          largest grid accepted (default 536870912)\n"
+    "  --band VOXELS           OpenVDB narrow band half-width (default 3)\n"
+    "  --skeleton-out FILE     also build skeleton.json with the automatic rig (see 'repose rig'); it needs\n"
+    "                          bones named as the rig knows them (femur_left, tibia_left, hip_left, ...)\n"
+    "  --max-gap MM            largest bone gap that still makes a joint, for --skeleton-out (default 6)\n";
+
+namespace {
+
+struct Args {
+  std::map<std::string, std::string> single;
+  std::vector<std::pair<std::string, std::string>> repeated;  // (option, value) in order
+  bool help = false;
+};
+
+Args parse(int argc, char** argv, int first) {
+  const std::set<std::string> valued{"skin",      "skin-name",  "voxel", "reference",    "out",    "unit-mm",
+                                     "padding",   "max-voxels", "band",  "skeleton-out", "max-gap"};
+  const std::set<std::string> repeatable{"bone", "tissue", "bones-split"};
+  Args a;
+  for (int i = first; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help") {
+      a.help = true;
+      continue;
+    }
+    if (arg.rfind("--", 0) != 0) throw VoxelizeUsageError("unexpected argument '" + arg + "'");
+    std::string name = arg.substr(2);
+    if (!valued.count(name) && !repeatable.count(name)) throw VoxelizeUsageError("unknown option --" + name);
+    if (i + 1 >= argc) throw VoxelizeUsageError("option --" + name + " needs a value");
+    const std::string value = argv[++i];
+    if (repeatable.count(name))
+      a.repeated.emplace_back(name, value);
+    else
+      a.single[name] = value;
+  }
+  return a;
+}
+
+double number(const Args& a, const std::string& name, double fallback) {
+  auto it = a.single.find(name);
+  if (it == a.single.end()) return fallback;
+  char* end = nullptr;
+  const double x = std::strtod(it->second.c_str(), &end);
+  if (it->second.empty() || *end != '\0' || !std::isfinite(x))
+    throw VoxelizeUsageError("--" + name + " needs a number, not '" + it->second + "'");
+  return x;
+}
+
+/// "NAME=FILE" -> (NAME, FILE)
+std::pair<std::string, std::string> nameAndFile(const std::string& option, const std::string& value) {
+  const auto eq = value.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == value.size())
+    throw VoxelizeUsageError("--" + option + " needs NAME=MESH, not '" + value + "'");
+  return {value.substr(0, eq), value.substr(eq + 1)};
+}
+
+/// Reads a surface as a triangle soup scaled to millimetres.
+TriangleMesh readTriangles(const std::string& path, double unitMm) {
+  vtkSmartPointer<vtkPolyData> mesh = readSurfaceMesh(path);
+  TriangleMesh m;
+  m.V.resize(mesh->GetNumberOfPoints(), 3);
+  for (vtkIdType i = 0; i < mesh->GetNumberOfPoints(); ++i) {
+    double p[3];
+    mesh->GetPoint(i, p);
+    m.V.row(i) << unitMm * p[0], unitMm * p[1], unitMm * p[2];
+  }
+  std::vector<int> tris;
+  vtkNew<vtkIdList> ids;
+  vtkCellArray* polys = mesh->GetPolys();
+  for (polys->InitTraversal(); polys->GetNextCell(ids);)
+    for (vtkIdType k = 1; k + 1 < ids->GetNumberOfIds(); ++k)
+      for (vtkIdType v : {ids->GetId(0), ids->GetId(k), ids->GetId(k + 1)}) tris.push_back(int(v));
+  if (tris.empty()) throw std::runtime_error(path + ": has no triangles");
+  m.F.resize(Eigen::Index(tris.size() / 3), 3);
+  std::copy(tris.begin(), tris.end(), m.F.data());
+  return m;
+}
+
+vtkSmartPointer<vtkImageData> toImage(const LabelVolume& labels) {
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  const ImageGrid& g = labels.grid;
+  image->SetExtent(0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1);
+  image->SetOrigin(g.origin.data());
+  image->SetSpacing(g.spacing.data());
+  double d[9];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) d[3 * r + c] = g.direction(r, c);
+  image->SetDirectionMatrix(d);
+  vtkNew<vtkIntArray> values;
+  values->SetName("Labels");
+  values->SetNumberOfTuples(vtkIdType(labels.data.size()));
+  std::copy(labels.data.begin(), labels.data.end(), values->GetPointer(0));
+  image->GetPointData()->SetScalars(values);
+  return image;
+}
+
+ImageGrid gridOf(vtkImageData* image) {
+  ImageGrid g;
+  int ext[6];
+  image->GetExtent(ext);
+  g.dims = {ext[1] - ext[0] + 1, ext[3] - ext[2] + 1, ext[5] - ext[4] + 1};
+  double origin[3];
+  image->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
+  for (int r = 0; r < 3; ++r) {
+    g.origin[r] = origin[r];
+    g.spacing[r] = image->GetSpacing()[r];
+    for (int c = 0; c < 3; ++c) g.direction(r, c) = image->GetDirectionMatrix()->GetElement(r, c);
+  }
+  return g;
+}
+
+/// labels.nii.gz -> labels.tsv beside it.
+std::string tablePathFor(const std::string& out) {
+  const std::string ext = imageExtension(out);
+  return out.substr(0, out.size() - ext.size()) + ".tsv";
+}
+
+double seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+int runVoxelizeCommand(int argc, char** argv, int first) {
+  const Args a = parse(argc, argv, first);
+  if (a.help) return std::cout << kVoxelizeUsage, 0;
+  auto require = [&](const std::string& n) {
+    auto it = a.single.find(n);
+    if (it == a.single.end() || it->second.empty()) throw VoxelizeUsageError("missing required option --" + n);
+    return it->second;
+  };
+  const std::string skinPath = require("skin");
+  const std::string outPath = require("out");
+  const std::string ext = imageExtension(outPath);
+  if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha" && ext != ".mhd" && ext != ".nhdr")
+    throw VoxelizeUsageError("--out needs an image file name (.nii.gz, .nii, .nrrd, .mha), not '" + outPath + "'");
+  const bool hasReference = a.single.count("reference") != 0;
+  if (!hasReference && !a.single.count("voxel")) throw VoxelizeUsageError("missing required option --voxel (or --reference)");
+  const double unitMm = number(a, "unit-mm", 1.0);
+  if (!(unitMm > 0)) throw VoxelizeUsageError("--unit-mm must be positive");
+  LabelVoxelizeOptions options;
+  options.voxelMm = number(a, "voxel", 1.0);
+  options.padVoxels = number(a, "padding", 2.0);
+  options.mesh.bandVoxels = number(a, "band", 3.0);
+  const double maxVoxels = number(a, "max-voxels", double(options.maxVoxels));
+  if (!(options.voxelMm > 0)) throw VoxelizeUsageError("--voxel must be positive");
+  if (options.padVoxels < 0) throw VoxelizeUsageError("--padding must not be negative");
+  if (options.mesh.bandVoxels < 1) throw VoxelizeUsageError("--band must be at least 1");
+  if (!(maxVoxels >= 1)) throw VoxelizeUsageError("--max-voxels must be at least 1");
+  options.maxVoxels = std::size_t(maxVoxels);
+  const double maxGap = number(a, "max-gap", 6.0);
+  for (const auto& [opt, value] : a.repeated) nameAndFile(opt, value);  // usage errors before any reading
+
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<VoxelizePart> parts;
+  {
+    VoxelizePart skin;
+    skin.name = a.single.count("skin-name") ? a.single.at("skin-name") : "soft_tissue";
+    skin.source = skinPath;
+    skin.role = VoxelizeRole::Skin;
+    TriangleMesh m = readTriangles(skinPath, unitMm);
+    skin.V = std::move(m.V);
+    skin.F = std::move(m.F);
+    parts.push_back(std::move(skin));
+  }
+  for (const auto& [opt, value] : a.repeated) {
+    const auto [name, file] = nameAndFile(opt, value);
+    TriangleMesh m = readTriangles(file, unitMm);
+    if (opt == "bones-split") {
+      std::vector<TriangleMesh> pieces;
+      try {
+        pieces = splitConnectedComponents(m.V, m.F);
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(file + ": " + e.what());
+      }
+      for (std::size_t i = 0; i < pieces.size(); ++i) {
+        VoxelizePart p;
+        p.name = name + "_" + std::to_string(i + 1);
+        p.source = file + " (piece " + std::to_string(i + 1) + " of " + std::to_string(pieces.size()) + ")";
+        p.role = VoxelizeRole::Bone;
+        p.V = std::move(pieces[i].V);
+        p.F = std::move(pieces[i].F);
+        parts.push_back(std::move(p));
+      }
+      std::cout << "voxelize: " << file << ": " << pieces.size() << " pieces, bones " << name << "_1.." << name << "_"
+                << pieces.size() << "\n";
+      continue;
+    }
+    VoxelizePart p;
+    p.name = name;
+    p.source = file;
+    p.role = opt == "bone" ? VoxelizeRole::Bone : VoxelizeRole::Tissue;
+    p.V = std::move(m.V);
+    p.F = std::move(m.F);
+    parts.push_back(std::move(p));
+  }
+  const double readSeconds = seconds(t0);
+
+  ImageGrid grid;
+  if (hasReference) grid = gridOf(readIntensityImage(a.single.at("reference")));
+  LabelVoxelization result;
+  try {
+    result = voxelizeLabels(parts, grid, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  std::cout << "voxelize: " << result.text();
+
+  LabelVolume labels = std::move(result.labels);
+  LabelTable table = result.table;
+  std::string skeletonJson;
+  if (a.single.count("skeleton-out")) {
+    AutoRigOptions rigOptions;
+    rigOptions.maxGapMm = maxGap;
+    AutoRigResult rig;
+    try {
+      rig = autoRig(labels, table, rigOptions);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(outPath + ": automatic skeleton: " + e.what());
+    }
+    std::cout << rig.report.text();
+    if (rig.skeleton.size() < 2)
+      throw std::runtime_error(outPath + ": the automatic skeleton found " + std::to_string(rig.skeleton.size()) +
+                               " joint(s): name the bones as the rig knows them (femur_left, tibia_left, hip_left, "
+                               "humerus_right, ...) or write skeleton.json by hand");
+    labels = std::move(rig.labels);
+    table = rig.table;
+    skeletonJson = skeletonToJson(rig.skeleton);
+  }
+
+  // Both outputs staged, then moved into place together.
+  const std::filesystem::path out(outPath);
+  AtomicOutputs files(out.has_parent_path() ? out.parent_path().string() : ".");
+  writeImage(toImage(labels), files.stage(out.filename().string()));
+  writeTextFile(files.stage(std::filesystem::path(tablePathFor(outPath)).filename().string()), labelTableToTsv(table));
+  std::unique_ptr<AtomicOutputs> skeletonFiles;  // only when the skeleton goes to another folder
+  if (!skeletonJson.empty()) {
+    namespace fs = std::filesystem;
+    const fs::path s(a.single.at("skeleton-out"));
+    const fs::path sdir = s.has_parent_path() ? s.parent_path() : fs::path(".");
+    const fs::path odir = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    AtomicOutputs* target = &files;
+    if (fs::weakly_canonical(sdir) != fs::weakly_canonical(odir)) {
+      skeletonFiles = std::make_unique<AtomicOutputs>(sdir.string());
+      target = skeletonFiles.get();
+    }
+    writeTextFile(target->stage(s.filename().string()), skeletonJson);
+  }
+  files.commit();
+  if (skeletonFiles) skeletonFiles->commit();
+  std::cout << "voxelize: " << labels.grid.dims[0] << "x" << labels.grid.dims[1] << "x" << labels.grid.dims[2]
+            << " voxels written to " << outPath << " and " << tablePathFor(outPath)
+            << (skeletonJson.empty() ? std::string() : " (skeleton: " + a.single.at("skeleton-out") + ")")
+            << "; reading " << readSeconds << " s, voxelizing " << result.seconds << " s\n";
+  return 0;
+}
+
+}  // namespace repose

@@ -1,0 +1,132 @@
+#!/usr/bin/python3
+"""Repose FEM relaxation benchmark: time per pose, Newton and CG iterations, inverted tets, volume ratio
+and peak memory of the corotational relaxation on the built-in phantoms, per linear solver.
+
+usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark_fem.py
+       [--sizes small,medium] [--solvers jacobi,ic,cholmod] [--models fixed,linear] [--repose build/bin/repose]
+       [--work DIR] [--angle DEG]
+Each (size, model, solver) runs in its own process so that its peak resident memory is its own; the
+"skin only" row is the same process without the relaxation (the memory the FEM adds is the difference).
+Prints a Markdown table."""
+import argparse
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2}
+MODELS = {"linear": 0, "fixed": 1}
+
+
+def pose_json(angle):
+    """A walking-like pose: one leg forward with the knee bent, the other back, the arms swinging."""
+    a = angle
+    return json.dumps({"rotations": {
+        "left_hip": {"axis": [1, 0, 0], "degrees": -a}, "left_knee": {"axis": [1, 0, 0], "degrees": a},
+        "right_hip": {"axis": [1, 0, 0], "degrees": 0.5 * a},
+        "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}})
+
+
+def child(case, model, solver, angle):
+    """Skins the case to the pose, then relaxes it (model/solver < 0: skinning only); prints one JSON line."""
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+    from repose import vtkReposeCorotationalRelax, vtkReposeSkinning
+    import numpy as np
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    mr = vtkXMLUnstructuredGridReader()
+    mr.SetFileName(f"{case}/mesh.vtu")
+    mr.Update()
+    rest = mr.GetOutput()
+    sk = vtkReposeSkinning()
+    sk.SetInputConnection(mr.GetOutputPort())
+    sk.SetSkeletonJSON(open(f"{case}/skeleton.json").read())
+    sk.SetPoseJSON(pose_json(angle))
+    sk.Update()
+    result = {"nodes": rest.GetNumberOfPoints(), "tets": rest.GetNumberOfCells()}
+    posed = sk.GetOutput()
+    if model >= 0:
+        fem = vtkReposeCorotationalRelax()
+        fem.SetInputConnection(0, sk.GetOutputPort())
+        fem.SetInputData(1, rest)
+        fem.SetModel(model)
+        fem.SetPreconditioner(solver)
+        fem.SetMaxIterations(20000)
+        t = time.perf_counter()
+        fem.Update()
+        result.update(seconds=time.perf_counter() - t, cg=fem.GetCGIterations(), newton=fem.GetNewtonIterations(),
+                      before=fem.GetInvertedBefore(), after=fem.GetInvertedAfter())
+        posed = fem.GetOutput()
+    cells = vtk_to_numpy(rest.GetCells().GetConnectivityArray()).reshape(-1, 4)
+
+    def volume(points):
+        p = vtk_to_numpy(points.GetData()).astype(np.float64)[cells]
+        return np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0])).sum() / 6
+
+    result["volume_ratio"] = volume(posed.GetPoints()) / volume(rest.GetPoints())
+    result["peak_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print("@@" + json.dumps(result))
+
+
+def run_child(case, model, solver, angle):
+    p = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", case, str(model), str(solver), str(angle)],
+                       capture_output=True, text=True)
+    m = re.search(r"^@@(.*)$", p.stdout, re.M)
+    if p.returncode != 0 or not m:
+        return None, (p.stderr.strip().splitlines() or ["failed"])[-1]
+    return json.loads(m.group(1)), ""
+
+
+def main():
+    if len(sys.argv) > 1 and sys.argv[1] == "--child":
+        child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]))
+        return
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="small,medium")
+    ap.add_argument("--solvers", default="jacobi,ic,cholmod")
+    ap.add_argument("--models", default="fixed")
+    ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
+    ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")
+    ap.add_argument("--angle", type=float, default=45.0, help="hip/knee/shoulder/elbow angle of the pose (degrees)")
+    args = ap.parse_args()
+    work = args.work or tempfile.mkdtemp(prefix="repose-bench-fem-")
+    rows = []
+    for size in args.sizes.split(","):
+        d = os.path.join(work, size)
+        case = f"{d}/case"
+        if not os.path.isfile(f"{case}/mesh.vtu"):
+            for cmd in ([args.repose, "phantom", "--size", size, "--out", f"{d}/phantom"],
+                        [args.repose, "prepare", "--labels", f"{d}/phantom/labels.nii.gz",
+                         "--skeleton", f"{d}/phantom/skeleton.json", "--out", case]):
+                p = subprocess.run(cmd, capture_output=True, text=True)
+                if p.returncode != 0:
+                    sys.exit(f"{' '.join(cmd)} failed:\n{p.stdout}\n{p.stderr}")
+        base, err = run_child(case, -1, -1, args.angle)
+        if base is None:
+            sys.exit(f"{size}: skinning failed: {err}")
+        rows.append((size, "skin only", "", base, ""))
+        for model in args.models.split(","):
+            for solver in args.solvers.split(","):
+                r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle)
+                rows.append((size, model, solver, r or base, err))
+                print(f"{size} {model} {solver}: {'done' if r else err}", file=sys.stderr)
+    print("| size | nodes | tets | model | solver | FEM s / pose | Newton its | CG its | inverted before -> after |"
+          " volume ratio | peak MiB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for size, model, solver, r, err in rows:
+        if err:
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | failed: {err} | | | | | |")
+        elif "seconds" not in r:
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | {r['volume_ratio']:.4f} |"
+                  f" {r['peak_mib']:.0f} |")
+        else:
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | {r['seconds']:.2f} | {r['newton']} |"
+                  f" {r['cg']} | {r['before']} -> {r['after']} | {r['volume_ratio']:.4f} | {r['peak_mib']:.0f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,293 @@
+// Surface meshes to voxels: analytic volumes, open surfaces, self-intersections, label priorities.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "mesh_topology.h"
+#include "mesh_voxelizer.h"
+
+using namespace repose;
+
+namespace {
+
+/// UV sphere: `rings` latitude bands, `segments` longitude segments, outward triangles.
+TriangleMesh sphere(const Eigen::Vector3d& c, double r, int rings = 48, int segments = 96) {
+  TriangleMesh m;
+  const int n = 2 + (rings - 1) * segments;
+  m.V.resize(n, 3);
+  m.V.row(0) = (c + Eigen::Vector3d(0, 0, r)).transpose();
+  m.V.row(1) = (c - Eigen::Vector3d(0, 0, r)).transpose();
+  for (int a = 1; a < rings; ++a)
+    for (int b = 0; b < segments; ++b) {
+      const double th = M_PI * a / rings, ph = 2 * M_PI * b / segments;
+      m.V.row(2 + (a - 1) * segments + b) =
+          (c + r * Eigen::Vector3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th))).transpose();
+    }
+  std::vector<Eigen::Vector3i> f;
+  auto at = [&](int a, int b) { return 2 + (a - 1) * segments + (b % segments); };
+  for (int b = 0; b < segments; ++b) {
+    f.push_back({0, at(1, b), at(1, b + 1)});
+    f.push_back({1, at(rings - 1, b + 1), at(rings - 1, b)});
+    for (int a = 1; a + 1 < rings; ++a) {
+      f.push_back({at(a, b), at(a + 1, b), at(a + 1, b + 1)});
+      f.push_back({at(a, b), at(a + 1, b + 1), at(a, b + 1)});
+    }
+  }
+  m.F.resize(Eigen::Index(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(Eigen::Index(i)) = f[i].transpose();
+  return m;
+}
+
+/// Axis-aligned box from lo to hi, 12 triangles.
+TriangleMesh box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  TriangleMesh m;
+  m.V.resize(8, 3);
+  for (int i = 0; i < 8; ++i)
+    m.V.row(i) << ((i & 1) ? hi.x() : lo.x()), ((i & 2) ? hi.y() : lo.y()), ((i & 4) ? hi.z() : lo.z());
+  m.F.resize(12, 3);
+  m.F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
+  return m;
+}
+
+TriangleMesh concat(const TriangleMesh& a, const TriangleMesh& b) {
+  TriangleMesh m;
+  m.V.resize(a.V.rows() + b.V.rows(), 3);
+  m.V << a.V, b.V;
+  m.F.resize(a.F.rows() + b.F.rows(), 3);
+  m.F << a.F, (b.F.array() + int(a.V.rows())).matrix();
+  return m;
+}
+
+/// Drops the triangles whose centroid has z above `zCut`: a sphere with a round hole.
+TriangleMesh cutTop(const TriangleMesh& s, double zCut) {
+  TriangleMesh m;
+  m.V = s.V;
+  std::vector<int> keep;
+  for (Eigen::Index t = 0; t < s.F.rows(); ++t)
+    if ((s.V(s.F(t, 0), 2) + s.V(s.F(t, 1), 2) + s.V(s.F(t, 2), 2)) / 3 <= zCut) keep.push_back(int(t));
+  m.F.resize(Eigen::Index(keep.size()), 3);
+  for (std::size_t i = 0; i < keep.size(); ++i) m.F.row(Eigen::Index(i)) = s.F.row(keep[i]);
+  return m;
+}
+
+ImageGrid cube(double lo, double hi, double h) {
+  ImageGrid g;
+  const int n = int(std::round((hi - lo) / h)) + 1;
+  g.dims = {n, n, n};
+  g.origin = Eigen::Vector3d::Constant(lo);
+  g.spacing = Eigen::Vector3d::Constant(h);
+  return g;
+}
+
+}  // namespace
+
+TEST(MeshTopology, SphereIsClosedAndOneComponent) {
+  const TriangleMesh s = sphere({0, 0, 0}, 10);
+  const MeshTopology t = analyzeMeshTopology(s.V, s.F);
+  EXPECT_TRUE(t.closed());
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_NEAR(t.enclosedVolume, 4.0 / 3.0 * M_PI * 1000, 0.01 * 4.0 / 3.0 * M_PI * 1000);
+  const TriangleMesh open = cutTop(s, 9.0);
+  const MeshTopology to = analyzeMeshTopology(open.V, open.F);
+  EXPECT_GT(to.boundaryEdges, 0u);
+  EXPECT_FALSE(to.closed());
+}
+
+TEST(MeshTopology, SplitsComponentsInFileOrderAndWeldsCoincidentVertices) {
+  TriangleMesh two = concat(box({5, 0, 0}, {6, 1, 1}), sphere({0, 0, 0}, 2, 8, 16));
+  const auto parts = splitConnectedComponents(two.V, two.F);
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0].F.rows(), 12);  // the box came first
+  EXPECT_EQ(parts[0].V.rows(), 8);
+  EXPECT_DOUBLE_EQ(parts[0].V.col(0).minCoeff(), 5.0);
+  EXPECT_EQ(parts[1].F.rows(), two.F.rows() - 12);
+  // A soup with one vertex per triangle corner (as STL stores it) is still one closed piece.
+  TriangleMesh soup;
+  const TriangleMesh b = box({0, 0, 0}, {1, 1, 1});
+  soup.V.resize(36, 3);
+  soup.F.resize(12, 3);
+  for (int t = 0; t < 12; ++t)
+    for (int c = 0; c < 3; ++c) {
+      soup.V.row(3 * t + c) = b.V.row(b.F(t, c));
+      soup.F(t, c) = 3 * t + c;
+    }
+  EXPECT_EQ(splitConnectedComponents(soup.V, soup.F).size(), 1u);
+  EXPECT_TRUE(analyzeMeshTopology(soup.V, soup.F).closed());
+  MeshTriangles bad = b.F;
+  bad(3, 1) = 8;
+  EXPECT_THROW(splitConnectedComponents(b.V, bad), std::invalid_argument);
+}
+
+TEST(MeshVoxelizer, BoxGivesItsExactVoxels) {
+  // Box faces halfway between voxel centres: exactly the 10 x 6 x 4 centres inside.
+  const TriangleMesh b = box({-5, -3, -2}, {5, 3, 2});
+  const ImageGrid g = cube(-9.5, 9.5, 1.0);
+  const MeshVoxelization m = voxelizeMesh(b.V, b.F, g);
+  EXPECT_EQ(m.insideVoxels, 10u * 6u * 4u);
+  EXPECT_FALSE(m.cutByGrid);
+  EXPECT_TRUE(m.at(10, 10, 10));  // centre voxel at (0.5, 0.5, 0.5)
+  EXPECT_FALSE(m.at(16, 10, 10));
+}
+
+TEST(MeshVoxelizer, SphereVolumeMatchesAnalytic) {
+  const double r = 12;
+  const TriangleMesh s = sphere({0.3, -0.2, 0.1}, r);
+  for (double h : {1.0, 0.5}) {
+    const ImageGrid g = cube(-16, 16, h);
+    const MeshVoxelization m = voxelizeMesh(s.V, s.F, g);
+    const double volume = double(m.insideVoxels) * h * h * h;
+    EXPECT_NEAR(volume, 4.0 / 3.0 * M_PI * r * r * r, 0.02 * 4.0 / 3.0 * M_PI * r * r * r) << "h " << h;
+  }
+}
+
+TEST(MeshVoxelizer, AnisotropicRotatedGrid) {
+  const double r = 10;
+  const TriangleMesh s = sphere({1, 2, 3}, r);
+  ImageGrid g;
+  g.dims = {40, 30, 60};
+  g.spacing = Eigen::Vector3d(0.7, 1.0, 0.5);
+  g.direction = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  g.origin = Eigen::Vector3d(1, 2, 3) - g.direction * g.spacing.cwiseProduct(Eigen::Vector3d(20, 15, 30));
+  const MeshVoxelization m = voxelizeMesh(s.V, s.F, g);
+  EXPECT_NEAR(double(m.insideVoxels) * g.spacing.prod(), 4.0 / 3.0 * M_PI * r * r * r, 0.03 * 4.0 / 3.0 * M_PI * r * r * r);
+  // Every inside voxel centre is inside the sphere (within a voxel).
+  for (int k = 0; k < 60; ++k)
+    for (int j = 0; j < 30; ++j)
+      for (int i = 0; i < 40; ++i)
+        if (m.at(i, j, k)) EXPECT_LT((g.indexToPhysical(Eigen::Vector3d(i, j, k)) - Eigen::Vector3d(1, 2, 3)).norm(), r + 0.1);
+}
+
+TEST(MeshVoxelizer, SelfIntersectingUnionOfTwoSpheres) {
+  // Two overlapping closed spheres in one soup: the inside is their union, not their XOR.
+  const double r = 8, d = 8;  // centres 8 apart
+  const TriangleMesh u = concat(sphere({-d / 2, 0, 0}, r), sphere({d / 2, 0, 0}, r));
+  const ImageGrid g = cube(-16, 16, 0.5);
+  const MeshVoxelization m = voxelizeMesh(u.V, u.F, g);
+  const double cap = M_PI * (r - d / 2) * (r - d / 2) * (3 * r - (r - d / 2)) / 3;  // spherical cap height r-d/2
+  const double unionVolume = 2 * (4.0 / 3.0 * M_PI * r * r * r) - 2 * cap;
+  EXPECT_NEAR(double(m.insideVoxels) * 0.125, unionVolume, 0.02 * unionVolume);
+  EXPECT_TRUE(m.at(32, 32, 32));  // the origin lies in both spheres
+}
+
+TEST(MeshVoxelizer, NestedInwardPieceIsACavityInvertedMeshIsSolid) {
+  // A hollow ball: outer sphere facing out, inner sphere facing in (as a skull's inner table).
+  TriangleMesh inner = sphere({0, 0, 0}, 6, 32, 64);
+  inner.F.col(1).swap(inner.F.col(2));
+  const TriangleMesh shell = concat(sphere({0, 0, 0}, 10), inner);
+  const ImageGrid g = cube(-12, 12, 0.5);
+  const MeshVoxelization m = voxelizeMesh(shell.V, shell.F, g);
+  const double expected = 4.0 / 3.0 * M_PI * (1000 - 216);
+  EXPECT_NEAR(double(m.insideVoxels) * 0.125, expected, 0.03 * expected);
+  EXPECT_EQ(m.cavities, 1u);
+  EXPECT_FALSE(m.at(24, 24, 24));  // the centre is in the cavity
+  // The whole ball inside out is still a solid ball: orientation only matters between pieces.
+  TriangleMesh flipped = sphere({0, 0, 0}, 10);
+  flipped.F.col(1).swap(flipped.F.col(2));
+  const MeshVoxelization f = voxelizeMesh(flipped.V, flipped.F, g);
+  EXPECT_NEAR(double(f.insideVoxels) * 0.125, 4.0 / 3.0 * M_PI * 1000, 0.02 * 4.0 / 3.0 * M_PI * 1000);
+  // An inward-facing piece beside (not inside) the ball is kept as a solid, and reported.
+  TriangleMesh side = sphere({0, 0, 0}, 1.5, 12, 24);
+  side.V.col(0).array() += 12.0;  // centre (12, 0, 0), outside the ball of radius 9 at (-2, 0, 0)
+  side.F.col(1).swap(side.F.col(2));
+  const TriangleMesh two = concat(sphere({-2, 0, 0}, 9), side);
+  const MeshVoxelization t = voxelizeMesh(two.V, two.F, cube(-12, 14, 0.5));
+  EXPECT_EQ(t.invertedPieces, 1u);
+  EXPECT_EQ(t.cavities, 0u);
+  EXPECT_TRUE(t.at(48, 26, 26));  // (12, 1, 1) inside the small sphere
+}
+
+TEST(MeshVoxelizer, SmallHoleIsBridgedLargeHoleIsReported) {
+  const TriangleMesh s = sphere({0, 0, 0}, 10, 48, 96);
+  const ImageGrid g = cube(-14, 14, 1.0);
+  // A hole of a few tenths of a voxel (the polar fan): the inside survives.
+  const TriangleMesh pin = cutTop(s, 9.95);
+  ASSERT_GT(analyzeMeshTopology(pin.V, pin.F).boundaryEdges, 0u);
+  const MeshVoxelization m = voxelizeMesh(pin.V, pin.F, g);
+  EXPECT_NEAR(double(m.insideVoxels), 4.0 / 3.0 * M_PI * 1000, 0.03 * 4.0 / 3.0 * M_PI * 1000);
+
+  // The top half removed: no inside; voxelizeLabels names the file and the holes.
+  const TriangleMesh bowl = cutTop(s, 0.0);
+  VoxelizePart skin{"body", "bowl.stl", VoxelizeRole::Skin, bowl.V, bowl.F};
+  try {
+    voxelizeLabels({skin}, g);
+    FAIL() << "an open bowl was voxelized";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bowl.stl: the surface is not closed enough"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MeshVoxelizer, LabelsPrioritiesWarningsAndGrid) {
+  const TriangleMesh body = box({-20.25, -10.25, -30.25}, {20.25, 10.25, 30.25});
+  const TriangleMesh boneA = sphere({0, 0, 10}, 6, 24, 48);
+  const TriangleMesh boneB = sphere({0, 0, -10}, 6, 24, 48);
+  const TriangleMesh muscle = box({-8, -8, -20}, {8, 8, 20});       // under both bones
+  const TriangleMesh sticking = box({15, -3, -3}, {25, 3, 3});       // half outside the body
+  std::vector<VoxelizePart> parts{{"soft_tissue", "skin.vtp", VoxelizeRole::Skin, body.V, body.F},
+                                   {"muscle", "muscle.obj", VoxelizeRole::Tissue, muscle.V, muscle.F},
+                                   {"upper", "a.stl", VoxelizeRole::Bone, boneA.V, boneA.F},
+                                   {"lower", "b.stl", VoxelizeRole::Bone, boneB.V, boneB.F},
+                                   {"stick", "c.stl", VoxelizeRole::Bone, sticking.V, sticking.F}};
+  LabelVoxelizeOptions o;
+  o.voxelMm = 1.0;
+  o.padVoxels = 2;
+  const LabelVoxelization r = voxelizeLabels(parts, ImageGrid{}, o);
+  const ImageGrid& g = r.labels.grid;
+  // Centred on the skin's bounds, 2 voxels of padding: centres at half-integers.
+  EXPECT_EQ(g.dims[0], 46);
+  EXPECT_EQ(g.dims[2], 66);
+  EXPECT_NEAR(g.origin.x(), -22.5, 1e-12);
+  EXPECT_TRUE(g.direction.isIdentity());
+  // Label order: skin, bones in order, tissues.
+  ASSERT_EQ(r.table.labels.size(), 6u);
+  EXPECT_EQ(r.table.labels[1].name, "soft_tissue");
+  EXPECT_EQ(r.table.labels[2].name, "upper");
+  EXPECT_EQ(r.table.labels[2].kind, LabelKind::Bone);
+  EXPECT_EQ(r.table.labels[4].name, "stick");
+  EXPECT_EQ(r.table.labels[5].name, "muscle");
+  EXPECT_EQ(r.table.labels[5].kind, LabelKind::Soft);
+  auto labelAt = [&](double x, double y, double z) {
+    const Eigen::Vector3d ijk = g.physicalToIndex({x, y, z});
+    return r.labels.at(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z())));
+  };
+  EXPECT_EQ(labelAt(0, 0, 10), 2);    // bone over tissue
+  EXPECT_EQ(labelAt(0, 0, -10), 3);
+  EXPECT_EQ(labelAt(0, 0, 0), 5);     // tissue over skin
+  EXPECT_EQ(labelAt(0, 9, 0), 1);     // skin interior
+  EXPECT_EQ(labelAt(22, 0, 0), 4);    // the bone outside the skin is kept
+  EXPECT_EQ(labelAt(0, 0, 32), 0);
+  ASSERT_EQ(r.parts.size(), 5u);
+  EXPECT_DOUBLE_EQ(r.parts[3].outsideSkinFraction, 3.0 / 8.0);  // x 20.5 .. 22.5 of 15.5 .. 22.5
+  EXPECT_EQ(r.parts[1].outsideSkinFraction, 0.0);
+  bool warned = false;
+  for (const auto& w : r.warnings) warned |= w.find("c.stl:") == 0 && w.find("outside the skin") != std::string::npos;
+  EXPECT_TRUE(warned) << r.text();
+  EXPECT_EQ(r.parts[0].labelledVoxels + r.parts[1].labelledVoxels + r.parts[2].labelledVoxels +
+                r.parts[3].labelledVoxels + r.parts[4].labelledVoxels,
+            std::size_t(40 * 20 * 60 + 3 * 6 * 6));
+
+  // Too many voxels, no skin, two skins, duplicate names.
+  o.maxVoxels = 1000;
+  EXPECT_THROW(voxelizeLabels(parts, ImageGrid{}, o), std::invalid_argument);
+  o.maxVoxels = std::size_t(1) << 30;
+  EXPECT_THROW(voxelizeLabels({parts[2]}, ImageGrid{}, o), std::invalid_argument);
+  auto twice = parts;
+  twice[1].role = VoxelizeRole::Skin;
+  EXPECT_THROW(voxelizeLabels(twice, ImageGrid{}, o), std::invalid_argument);
+  twice = parts;
+  twice[3].name = "upper";
+  EXPECT_THROW(voxelizeLabels(twice, ImageGrid{}, o), std::invalid_argument);
+}
+
+TEST(MeshVoxelizer, BadInput) {
+  const TriangleMesh b = box({0, 0, 0}, {1, 1, 1});
+  const ImageGrid g = cube(-2, 2, 1);
+  EXPECT_THROW(voxelizeMesh(MeshVertices(), MeshTriangles(), g), std::invalid_argument);
+  MeshVertices nan = b.V;
+  nan(2, 1) = NAN;
+  EXPECT_THROW(voxelizeMesh(nan, b.F, g), std::invalid_argument);
+  EXPECT_THROW(voxelizeMesh(b.V, b.F, ImageGrid{}), std::invalid_argument);
+  EXPECT_THROW(gridFittingPoints(b.V, 0.0, 2, 1000), std::invalid_argument);
+}
