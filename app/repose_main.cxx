@@ -166,7 +166,7 @@ const char* kPrepareUsage =
 
 const char* kPoseUsage =
     "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
-    "                   [--mesh FILE ...] [--relax [--relax-iterations N] [--poisson NU]] [--compare lbs,dqs,dqs+fem]\n"
+    "                   [--mesh FILE ...] [--relax [--relax-model M] [--poisson NU]] [--compare lbs,dqs,dqs+fem]\n"
     "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels.\n"
@@ -181,7 +181,9 @@ const char* kPoseUsage =
     "                          extrapolated) and the binding is cached in CASE_DIR/bindings/, the only place pose\n"
     "                          writes into a case (a read-only case is bound again on every run)\n"
     "  --relax                 refine the skinned pose by a static corotational FEM solve (bones stay rigid,\n"
-    "                          soft tissue keeps its volume); --relax-iterations N (default 1), --poisson NU (0.49)\n"
+    "                          soft tissue keeps its volume); --poisson NU (0.49); --relax-model fixed-corotated\n"
+    "                          (default: nonlinear, Newton with a line search that never adds inverted tets) or\n"
+    "                          linear (faster, volume kept to first order; --relax-iterations N outer iterations)\n"
     "  --compare M,M,...       fidelity.csv and fidelity.png: body and per-label volume ratios, inverted tets and\n"
     "                          |det F - 1| for each of lbs, dqs, lbs+fem, dqs+fem\n";
 
@@ -430,9 +432,14 @@ void requireDisplay(int argc, char** argv, const char* why);
 
 void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
   if (!o.has("relax")) {
-    if (o.has("relax-iterations") || o.has("poisson")) throw UsageError("--relax-iterations and --poisson need --relax");
+    if (o.has("relax-iterations") || o.has("poisson") || o.has("relax-model"))
+      throw UsageError("--relax-model, --relax-iterations and --poisson need --relax");
     return;
   }
+  const std::string model = o.get("relax-model", "fixed-corotated");
+  if (model != "fixed-corotated" && model != "linear")
+    throw UsageError("--relax-model must be fixed-corotated or linear");
+  pipeline.setRelaxationModel(model);
   const double nu = o.number("poisson", 0.49);
   const double iterations = o.number("relax-iterations", 1);
   if (!(nu > -1 && nu < 0.5)) throw UsageError("--poisson must be in (-1, 0.5)");
@@ -813,7 +820,7 @@ int main(int argc, char** argv) {
                                 none));
     if (command == "pose")
       return runPose(Options(argc, argv, 2,
-                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "poisson",
+                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model", "poisson",
                               "compare", "mesh"},
                              {"relax"}),
                      argc, argv);
@@ -828,7 +835,7 @@ int main(int argc, char** argv) {
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image", "relax-iterations", "poisson", "compare", "mesh"},
+                                 "unit-mm", "image", "relax-iterations", "relax-model", "poisson", "compare", "mesh"},
                                 {"volumes", "no-root-motion", "relax"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");

@@ -531,6 +531,7 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
     }
     relax_->SetPoissonRatio(poisson);
     relax_->SetOuterIterations(outerIterations);
+    relax_->SetModel(relaxModel_);
   } else {
     relax_ = nullptr;
   }
@@ -538,6 +539,16 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
   deformer_->SetInputConnection(1, port);
   labelResampler_->SetInputConnection(2, port);
   if (imageResampler_) imageResampler_->SetInputConnection(2, port);
+}
+
+void Pipeline::setRelaxationModel(const std::string& model) {
+  if (model == "fixed-corotated" || model == "fixed")
+    relaxModel_ = 1;
+  else if (model == "linear")
+    relaxModel_ = 0;
+  else
+    throw std::runtime_error("unknown relaxation model '" + model + "' (expected fixed-corotated or linear)");
+  if (relax_) relax_->SetModel(relaxModel_);
 }
 
 std::string Pipeline::relaxationSummary() const {

@@ -92,6 +92,9 @@ public:
   /// Corotational FEM relaxation of the skinned mesh (bone nodes stay rigid); everything posed
   /// downstream (surfaces, volumes) then follows the relaxed mesh.
   void setRelaxation(bool enabled, double poisson = 0.49, int outerIterations = 1);
+  /// "fixed-corotated" (default: nonlinear, keeps volume, untangles inverted tets) or "linear"
+  /// (one linearised corotational solve per outer iteration: faster, volume kept to first order).
+  void setRelaxationModel(const std::string& model);
   /// One line on the last relaxation: CG iterations, residual, inverted tets before and after.
   std::string relaxationSummary() const;
   /// Optional intensity image on the rest label grid, posed with trilinear sampling.
@@ -135,6 +138,7 @@ private:
   vtkSmartPointer<vtkPolyData> restSurfaces_;
   vtkSmartPointer<vtkReposeSkinning> skinning_;
   vtkSmartPointer<vtkReposeCorotationalRelax> relax_;  // null when relaxation is off
+  int relaxModel_ = 1;                                   // vtkReposeCorotationalRelax::Model
   vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;

@@ -17,6 +17,8 @@ import tempfile
 import time
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The built Python package, unless PYTHONPATH already names one.
+sys.path.append(os.path.join(root, "build", "lib", "python3", "dist-packages"))
 
 
 def run_measured(cmd):

@@ -28,6 +28,8 @@ from vtkmodules.vtkIOPLY import vtkPLYWriter
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The built Python package, unless PYTHONPATH already names one.
+sys.path.append(os.path.join(root, "build", "lib", "python3", "dist-packages"))
 POSE = os.path.join(root, "Testing", "Data", "tiny_pose.json")
 
 

@@ -19,6 +19,10 @@ import tempfile
 import time
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The built Python package, unless PYTHONPATH already names one (children inherit it).
+_package = os.path.join(root, "build", "lib", "python3", "dist-packages")
+sys.path.append(_package)
+os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (os.environ.get("PYTHONPATH"), _package) if p)
 SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2}
 MODELS = {"linear": 0, "fixed": 1}
 
