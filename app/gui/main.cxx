@@ -13,6 +13,8 @@
 
 #include <QApplication>
 #include <QElapsedTimer>
+#include <QPixmap>
+#include <QTimer>
 #include <QSurfaceFormat>
 #include <QVTKOpenGLNativeWidget.h>
 #include <vtkLogger.h>
@@ -112,7 +114,7 @@ int main(int argc, char** argv) {
   vtkNew<QuietOutputWindow> quiet;
   vtkOutputWindow::SetInstance(quiet);
   if (!std::getenv("REPOSE_VERBOSE")) vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
-  QString benchmarkCase, openDir;
+  QString benchmarkCase, openDir, grabFile;
   int frames = 200;
   std::string jointName = "left_hip";
   for (int i = 1; i < argc; ++i) {
@@ -120,13 +122,16 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") {
       std::cout << "usage: repose-gui [CASE_DIR]\n"
                    "       repose-gui --benchmark-drag CASE_DIR [--frames N] [--joint NAME]\n"
+                   "       repose-gui CASE_DIR --grab FILE.png\n"
                    "  Opens the Repose desktop application (optionally with a prepared case).\n"
-                   "  --benchmark-drag  drag a joint N times (default 200) as the mouse does and print frame times\n";
+                   "  --benchmark-drag  drag a joint N times (default 200) as the mouse does and print frame times\n"
+                   "  --grab FILE.png   save a picture of the whole window once the case is shown, then quit\n";
       return 0;
     }
     if (a == "--benchmark-drag" && i + 1 < argc) benchmarkCase = argv[++i];
     else if (a == "--frames" && i + 1 < argc) frames = std::max(1, std::atoi(argv[++i]));
     else if (a == "--joint" && i + 1 < argc) jointName = argv[++i];
+    else if (a == "--grab" && i + 1 < argc) grabFile = argv[++i];
     else if (!a.empty() && a[0] != '-') openDir = QString::fromStdString(a);
   }
   vtkOpenGLRenderWindow::SetGlobalMaximumNumberOfMultiSamples(0);
@@ -137,5 +142,13 @@ int main(int argc, char** argv) {
   window.show();
   if (!benchmarkCase.isEmpty()) return benchmarkDrag(window, benchmarkCase, frames, jointName);
   if (!openDir.isEmpty()) window.openCase(openDir);
+  if (!grabFile.isEmpty()) {
+    // For documentation: the window as a user sees it, after the slice views have had time to fill.
+    QTimer::singleShot(4000, &window, [&] {
+      const bool ok = window.grab().save(grabFile);
+      if (!ok) std::cerr << "repose-gui: error: " << grabFile.toStdString() << ": cannot write the picture\n";
+      app.exit(ok ? 0 : 1);
+    });
+  }
   return app.exec();
 }

@@ -240,7 +240,16 @@ void SliceViews::setVolumes(vtkImageData* labels, vtkImageData* image, const Lab
     }
     d_->hasGrid = true;
     updateCursor();
-    for (auto& v : d_->views) v.renderer->ResetCamera();
+    for (auto& v : d_->views) {
+      v.renderer->ResetCamera();
+      // ResetCamera fits the 3D bounding sphere, which leaves a slice small: fit the slice's own
+      // width and height to the view instead.
+      const int h = v.axis == 2 ? 0 : (v.axis == 1 ? 0 : 1), vert = v.axis == 2 ? 1 : 2;
+      const double width = dims[h] * sp[h], height = dims[vert] * sp[vert];
+      const int* size = v.renderer->GetSize();
+      const double aspect = size[1] > 0 ? double(size[0]) / size[1] : 1.0;
+      v.renderer->GetActiveCamera()->SetParallelScale(0.52 * std::max(height, width / std::max(aspect, 1e-3)));
+    }
   } else {
     updateCursor();
   }
