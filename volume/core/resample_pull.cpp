@@ -404,9 +404,9 @@ struct LabelKernel {
     for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
       if (!inside(r)) continue;
       const std::size_t n = index(r);
-      if (restCovered && restCovered[n] && fd.at(i) > nearFace) continue;  // another part's interior
       const std::int32_t v = src[n];
       if (v == background) continue;  // never paint background over a neighbour's extension
+      if (restCovered && restCovered[n] && fd.at(i) > nearFace) continue;  // another part's interior
       push(i - i0, v);
     }
   }
