@@ -27,6 +27,7 @@
 #include "label_table.h"
 #include "mesh_io.h"
 #include "mesh_voxelizer.h"
+#include "ReposeImageConversion.h"
 #include "repose_pipeline.h"
 #include "skeleton.h"
 
@@ -131,23 +132,6 @@ TriangleMesh readTriangles(const std::string& path, double unitMm) {
   return m;
 }
 
-vtkSmartPointer<vtkImageData> toImage(const LabelVolume& labels) {
-  auto image = vtkSmartPointer<vtkImageData>::New();
-  const ImageGrid& g = labels.grid;
-  image->SetExtent(0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1);
-  image->SetOrigin(g.origin.data());
-  image->SetSpacing(g.spacing.data());
-  double d[9];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) d[3 * r + c] = g.direction(r, c);
-  image->SetDirectionMatrix(d);
-  vtkNew<vtkIntArray> values;
-  values->SetName("Labels");
-  values->SetNumberOfTuples(vtkIdType(labels.data.size()));
-  std::copy(labels.data.begin(), labels.data.end(), values->GetPointer(0));
-  image->GetPointData()->SetScalars(values);
-  return image;
-}
 
 ImageGrid gridOf(vtkImageData* image) {
   ImageGrid g;
@@ -286,7 +270,7 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   // Both outputs staged, then moved into place together.
   const std::filesystem::path out(outPath);
   AtomicOutputs files(out.has_parent_path() ? out.parent_path().string() : ".");
-  writeImage(toImage(labels), files.stage(out.filename().string()));
+  writeImage(repose_vtk::ToImage<vtkIntArray>(labels, "Labels"), files.stage(out.filename().string()));
   writeTextFile(files.stage(std::filesystem::path(tablePathFor(outPath)).filename().string()), labelTableToTsv(table));
   std::unique_ptr<AtomicOutputs> skeletonFiles;  // only when the skeleton goes to another folder
   if (!skeletonJson.empty()) {

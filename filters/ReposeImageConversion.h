@@ -5,11 +5,13 @@
 
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
+#include "vtkInformation.h"
 #include "vtkMatrix3x3.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkSMPTools.h"
 #include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
 #include <algorithm>
@@ -69,15 +71,9 @@ bool ToVolume(vtkImageData* image, repose::Volume<T>& volume)
   return true;
 }
 
-/// Core mask -> unsigned char vtkImageData named "Mask" with the mask's lattice.
-inline vtkSmartPointer<vtkImageData> ToImage(const repose::MaskVolume& mask)
+/// The direction matrix of a core grid, row-major as VTK takes it.
+inline void DirectionArray(const repose::ImageGrid& g, double d[9])
 {
-  auto image = vtkSmartPointer<vtkImageData>::New();
-  const auto& g = mask.grid;
-  image->SetExtent(0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1);
-  image->SetOrigin(g.origin.data());
-  image->SetSpacing(g.spacing.data());
-  double d[9];
   for (int r = 0; r < 3; ++r)
   {
     for (int c = 0; c < 3; ++c)
@@ -85,13 +81,47 @@ inline vtkSmartPointer<vtkImageData> ToImage(const repose::MaskVolume& mask)
       d[3 * r + c] = g.direction(r, c);
     }
   }
+}
+
+/// Core volume -> vtkImageData with the volume's lattice and one named scalar array of ArrayT
+/// (vtkUnsignedCharArray for masks, vtkIntArray for labels).
+template <class ArrayT, class T>
+vtkSmartPointer<vtkImageData> ToImage(const repose::Volume<T>& volume, const char* name)
+{
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  const auto& g = volume.grid;
+  image->SetExtent(0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1);
+  image->SetOrigin(g.origin.data());
+  image->SetSpacing(g.spacing.data());
+  double d[9];
+  DirectionArray(g, d);
   image->SetDirectionMatrix(d);
-  vtkNew<vtkUnsignedCharArray> values;
-  values->SetName("Mask");
-  values->SetNumberOfTuples(static_cast<vtkIdType>(mask.data.size()));
-  std::copy(mask.data.begin(), mask.data.end(), values->GetPointer(0));
+  vtkNew<ArrayT> values;
+  values->SetName(name);
+  values->SetNumberOfTuples(static_cast<vtkIdType>(volume.data.size()));
+  std::copy(volume.data.begin(), volume.data.end(), values->GetPointer(0));
   image->GetPointData()->SetScalars(values);
   return image;
+}
+
+/// Core mask -> unsigned char vtkImageData named "Mask" with the mask's lattice.
+inline vtkSmartPointer<vtkImageData> ToImage(const repose::MaskVolume& mask)
+{
+  return ToImage<vtkUnsignedCharArray>(mask, "Mask");
+}
+
+/// Announces a source's output lattice (extent, origin, spacing, direction, scalar type) in
+/// RequestInformation.
+inline void SetOutputGeometry(const repose::ImageGrid& g, vtkInformation* outInfo, int scalarType)
+{
+  const int extent[6] = { 0, g.dims[0] - 1, 0, g.dims[1] - 1, 0, g.dims[2] - 1 };
+  double direction[9];
+  DirectionArray(g, direction);
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent, 6);
+  outInfo->Set(vtkDataObject::ORIGIN(), g.origin.data(), 3);
+  outInfo->Set(vtkDataObject::SPACING(), g.spacing.data(), 3);
+  outInfo->Set(vtkDataObject::DIRECTION(), direction, 9);
+  vtkDataObject::SetPointDataActiveScalarInfo(outInfo, scalarType, 1);
 }
 
 } // namespace repose_vtk

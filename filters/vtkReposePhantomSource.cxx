@@ -9,6 +9,7 @@
 #include "vtkPointData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
+#include "ReposeImageConversion.h"
 #include "phantom.h"
 #include "skeleton.h"
 
@@ -36,23 +37,6 @@ repose::PhantomSize ToCore(int size)
   }
 }
 
-void SetGeometry(const repose::ImageGrid& grid, vtkInformation* outInfo)
-{
-  const int extent[6] = { 0, grid.dims[0] - 1, 0, grid.dims[1] - 1, 0, grid.dims[2] - 1 };
-  double direction[9];
-  for (int r = 0; r < 3; ++r)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      direction[3 * r + c] = grid.direction(r, c);
-    }
-  }
-  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent, 6);
-  outInfo->Set(vtkDataObject::ORIGIN(), grid.origin.data(), 3);
-  outInfo->Set(vtkDataObject::SPACING(), grid.spacing.data(), 3);
-  outInfo->Set(vtkDataObject::DIRECTION(), direction, 9);
-  vtkDataObject::SetPointDataActiveScalarInfo(outInfo, VTK_INT, 1);
-}
 }
 
 vtkReposePhantomSource::vtkReposePhantomSource()
@@ -117,8 +101,8 @@ int vtkReposePhantomSource::RequestInformation(
 {
   try
   {
-    SetGeometry(repose::describePhantom(ToCore(this->Size)).labels.grid,
-      outputVector->GetInformationObject(0));
+    repose_vtk::SetOutputGeometry(repose::describePhantom(ToCore(this->Size)).labels.grid,
+      outputVector->GetInformationObject(0), VTK_INT);
   }
   catch (const std::exception& e)
   {

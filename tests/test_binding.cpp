@@ -5,6 +5,7 @@
 
 #include "barycentric_binding.h"
 #include "tet_locator.h"
+#include "box_tet_mesh.h"
 #include "tet_mesh.h"
 
 namespace {
@@ -12,37 +13,9 @@ namespace {
 using repose::Points;
 using repose::Tets;
 
-// Box [lo, hi] split into n cubes per axis, each cut into 6 Kuhn tets (conforming faces), positively oriented.
 void boxMesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const std::array<int, 3>& n, Points& V,
              Tets& T) {
-  const int sx = n[0] + 1, sy = n[1] + 1, sz = n[2] + 1;
-  V.resize(std::size_t(sx) * sy * sz, 3);
-  auto id = [&](int i, int j, int k) { return (k * sy + j) * sx + i; };
-  for (int k = 0; k < sz; ++k)
-    for (int j = 0; j < sy; ++j)
-      for (int i = 0; i < sx; ++i) {
-        const Eigen::Vector3d f(double(i) / n[0], double(j) / n[1], double(k) / n[2]);
-        V.row(id(i, j, k)) = (lo + (hi - lo).cwiseProduct(f)).transpose();
-      }
-  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  T.resize(std::size_t(n[0]) * n[1] * n[2] * 6, 4);
-  int t = 0;
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i)
-        for (const auto& p : perms) {
-          int c[3] = {i, j, k};
-          int row[4];
-          row[0] = id(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s) {
-            ++c[p[s]];
-            row[s + 1] = id(c[0], c[1], c[2]);
-          }
-          if (repose::tetVolume(V.row(row[0]).transpose(), V.row(row[1]).transpose(), V.row(row[2]).transpose(),
-                                V.row(row[3]).transpose()) < 0)
-            std::swap(row[2], row[3]);
-          T.row(t++) << row[0], row[1], row[2], row[3];
-        }
+  kuhnBoxMesh(lo, hi, n, V, T);
 }
 
 // A mildly irregular mesh: the box lattice with interior nodes jittered (tets stay positive).

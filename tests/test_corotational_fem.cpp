@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "corotational_fem.h"
+#include "box_tet_mesh.h"
 #include "tet_mesh.h"
 
 namespace {
@@ -25,34 +26,13 @@ struct Box {
   int id(int i, int j, int k) const { return (k * ny + j) * nx + i; }
 };
 
-/// nx-1 by ny-1 by nz-1 cubes of edge h, each split into the 6 Kuhn tets (conforming, all positive).
+/// cx by cy by cz cubes of edge h from the origin, each split into the 6 Kuhn tets.
 Box makeBox(int cx, int cy, int cz, double h) {
   Box b;
   b.nx = cx + 1;
   b.ny = cy + 1;
   b.nz = cz + 1;
-  b.nodes.resize(b.nx * b.ny * b.nz, 3);
-  for (int k = 0; k < b.nz; ++k)
-    for (int j = 0; j < b.ny; ++j)
-      for (int i = 0; i < b.nx; ++i) b.nodes.row(b.id(i, j, k)) << i * h, j * h, k * h;
-  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  b.tets.resize(6 * cx * cy * cz, 4);
-  int t = 0;
-  for (int k = 0; k < cz; ++k)
-    for (int j = 0; j < cy; ++j)
-      for (int i = 0; i < cx; ++i)
-        for (const auto& p : perms) {
-          int c[3] = {i, j, k};
-          int v[4];
-          v[0] = b.id(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s) {
-            ++c[p[s]];
-            v[s + 1] = b.id(c[0], c[1], c[2]);
-          }
-          const auto P = [&](int n) { return Eigen::Vector3d(b.nodes.row(n).transpose()); };
-          if (repose::tetVolume(P(v[0]), P(v[1]), P(v[2]), P(v[3])) < 0) std::swap(v[2], v[3]);
-          b.tets.row(t++) << v[0], v[1], v[2], v[3];
-        }
+  kuhnBoxMesh(Eigen::Vector3d::Zero(), h * Eigen::Vector3d(cx, cy, cz), {cx, cy, cz}, b.nodes, b.tets);
   return b;
 }
 

@@ -12,6 +12,7 @@
 
 #include "barycentric_binding.h"
 #include "tet_locator.h"
+#include "box_tet_mesh.h"
 #include "tet_mesh.h"
 
 namespace {
@@ -19,40 +20,9 @@ namespace {
 using repose::Points;
 using repose::Tets;
 
-// Box lattice, each cube cut into 6 Kuhn tets, interior nodes jittered (tets stay positive).
+// Box lattice with interior nodes jittered (tets stay positive).
 void jitteredBox(const std::array<int, 3>& n, Points& V, Tets& T, unsigned seed = 5) {
-  const Eigen::Vector3d lo(-20, -10, 0), hi(30, 15, 60);
-  const int sx = n[0] + 1, sy = n[1] + 1, sz = n[2] + 1;
-  V.resize(Eigen::Index(sx) * sy * sz, 3);
-  auto id = [&](int i, int j, int k) { return (k * sy + j) * sx + i; };
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-0.15, 0.15);
-  for (int k = 0; k < sz; ++k)
-    for (int j = 0; j < sy; ++j)
-      for (int i = 0; i < sx; ++i) {
-        Eigen::Vector3d f(double(i) / n[0], double(j) / n[1], double(k) / n[2]);
-        if (i > 0 && j > 0 && k > 0 && i < n[0] && j < n[1] && k < n[2])
-          f += Eigen::Vector3d(u(rng) / n[0], u(rng) / n[1], u(rng) / n[2]);
-        V.row(id(i, j, k)) = (lo + (hi - lo).cwiseProduct(f)).transpose();
-      }
-  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  T.resize(Eigen::Index(n[0]) * n[1] * n[2] * 6, 4);
-  int t = 0;
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i)
-        for (const auto& p : perms) {
-          int c[3] = {i, j, k}, row[4];
-          row[0] = id(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s) {
-            ++c[p[s]];
-            row[s + 1] = id(c[0], c[1], c[2]);
-          }
-          if (repose::tetVolume(V.row(row[0]).transpose(), V.row(row[1]).transpose(), V.row(row[2]).transpose(),
-                                V.row(row[3]).transpose()) < 0)
-            std::swap(row[2], row[3]);
-          T.row(t++) << row[0], row[1], row[2], row[3];
-        }
+  kuhnBoxMesh(Eigen::Vector3d(-20, -10, 0), Eigen::Vector3d(30, 15, 60), n, V, T, 0.15, seed);
 }
 
 // Barycentric coordinates by solving the 3x3 system directly (independent of the locator's formula).

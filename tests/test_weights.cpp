@@ -16,49 +16,18 @@
 
 #include "harmonic_weights.h"
 #include "tet_laplacian.h"
+#include "box_tet_mesh.h"
 #include "tet_mesh.h"
 
 namespace {
 
 using repose::TetMesh;
 
-// Box of nx*ny*nz cubes of size h, each cut into the 6 Kuhn tets sharing its main diagonal
-// (conforming across faces; dihedral angles <= 90 degrees, so the maximum principle holds).
-// jitter moves interior nodes randomly by up to jitter*h.
+// Box of nx*ny*nz cubes of size h cut into Kuhn tets (dihedral angles <= 90 degrees, so the maximum
+// principle holds); jitter moves interior nodes randomly by up to jitter*h.
 TetMesh gridMesh(int nx, int ny, int nz, double h = 1.0, double jitter = 0.0, unsigned seed = 1) {
   TetMesh m;
-  const int px = nx + 1, py = ny + 1, pz = nz + 1;
-  auto id = [&](int i, int j, int k) { return i + px * (j + py * k); };
-  m.nodes.resize(px * py * pz, 3);
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-jitter * h, jitter * h);
-  for (int k = 0; k < pz; ++k)
-    for (int j = 0; j < py; ++j)
-      for (int i = 0; i < px; ++i) {
-        Eigen::RowVector3d p(i * h, j * h, k * h);
-        const bool interior = i > 0 && j > 0 && k > 0 && i < nx && j < ny && k < nz;
-        if (interior && jitter > 0) p += Eigen::RowVector3d(u(rng), u(rng), u(rng));
-        m.nodes.row(id(i, j, k)) = p;
-      }
-  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  m.tets.resize(6 * nx * ny * nz, 4);
-  int t = 0;
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        for (const auto& perm : perms) {
-          int c[3] = {i, j, k};
-          int v[4];
-          v[0] = id(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s) {
-            ++c[perm[s]];
-            v[s + 1] = id(c[0], c[1], c[2]);
-          }
-          const double vol = repose::tetVolume(m.nodes.row(v[0]), m.nodes.row(v[1]),
-                                               m.nodes.row(v[2]), m.nodes.row(v[3]));
-          if (vol < 0) std::swap(v[2], v[3]);
-          m.tets.row(t++) << v[0], v[1], v[2], v[3];
-        }
+  kuhnBoxMesh(Eigen::Vector3d::Zero(), h * Eigen::Vector3d(nx, ny, nz), {nx, ny, nz}, m.nodes, m.tets, jitter, seed);
   m.fixedBone.assign(m.nodes.rows(), -1);
   m.tetLabel.assign(m.tets.rows(), 0);
   return m;

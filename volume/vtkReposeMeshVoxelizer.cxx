@@ -179,21 +179,7 @@ int vtkReposeMeshVoxelizer::RequestInformation(
     vtkErrorMacro(<< e.what());
     return 0;
   }
-  vtkInformation* outInfo = outputVector->GetInformationObject(0);
-  int extent[6] = { 0, grid.dims[0] - 1, 0, grid.dims[1] - 1, 0, grid.dims[2] - 1 };
-  double direction[9];
-  for (int r = 0; r < 3; ++r)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      direction[3 * r + c] = grid.direction(r, c);
-    }
-  }
-  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent, 6);
-  outInfo->Set(vtkDataObject::ORIGIN(), grid.origin.data(), 3);
-  outInfo->Set(vtkDataObject::SPACING(), grid.spacing.data(), 3);
-  outInfo->Set(vtkDataObject::DIRECTION(), direction, 9);
-  vtkDataObject::SetPointDataActiveScalarInfo(outInfo, VTK_INT, 1);
+  repose_vtk::SetOutputGeometry(grid, outputVector->GetInformationObject(0), VTK_INT);
   return 1;
 }
 

@@ -117,31 +117,26 @@ TetLocator::TetLocator(const Points& nodes, const Tets& tets) : nodes_(nodes), t
   const std::size_t nCells = std::size_t(dims_.x()) * dims_.y() * dims_.z();
   {
     std::vector<std::atomic<std::uint32_t>> counts(nCells);
-    parallelFor(nT, [&](std::size_t t0, std::size_t t1) {
-      Eigen::Array3i c0, c1;
-      for (std::size_t t = t0; t < t1; ++t) {
-        cellRange(t, c0, c1);
-        for (int z = c0.z(); z <= c1.z(); ++z)
-          for (int y = c0.y(); y <= c1.y(); ++y)
-            for (int x = c0.x(); x <= c1.x(); ++x) counts[cellIndex({x, y, z})].fetch_add(1, std::memory_order_relaxed);
-      }
-    }, 4096);
+    // Calls visit(t, cell) for every grid cell that tet t's box overlaps, tets in parallel.
+    auto forEachTetCell = [&](auto&& visit) {
+      parallelFor(nT, [&](std::size_t t0, std::size_t t1) {
+        Eigen::Array3i c0, c1;
+        for (std::size_t t = t0; t < t1; ++t) {
+          cellRange(t, c0, c1);
+          for (int z = c0.z(); z <= c1.z(); ++z)
+            for (int y = c0.y(); y <= c1.y(); ++y)
+              for (int x = c0.x(); x <= c1.x(); ++x) visit(t, cellIndex({x, y, z}));
+        }
+      }, 4096);
+    };
+    forEachTetCell([&](std::size_t, std::size_t c) { counts[c].fetch_add(1, std::memory_order_relaxed); });
     cellStart_.assign(nCells + 1, 0);
     for (std::size_t c = 0; c < nCells; ++c) cellStart_[c + 1] = cellStart_[c] + counts[c].load(std::memory_order_relaxed);
     for (std::size_t c = 0; c < nCells; ++c) counts[c].store(0, std::memory_order_relaxed);
     cellTets_.resize(cellStart_.back());
-    parallelFor(nT, [&](std::size_t t0, std::size_t t1) {
-      Eigen::Array3i c0, c1;
-      for (std::size_t t = t0; t < t1; ++t) {
-        cellRange(t, c0, c1);
-        for (int z = c0.z(); z <= c1.z(); ++z)
-          for (int y = c0.y(); y <= c1.y(); ++y)
-            for (int x = c0.x(); x <= c1.x(); ++x) {
-              const std::size_t c = cellIndex({x, y, z});
-              cellTets_[cellStart_[c] + counts[c].fetch_add(1, std::memory_order_relaxed)] = int(t);
-            }
-      }
-    }, 4096);
+    forEachTetCell([&](std::size_t t, std::size_t c) {
+      cellTets_[cellStart_[c] + counts[c].fetch_add(1, std::memory_order_relaxed)] = int(t);
+    });
   }
   // Ascending tet ids per cell: findContaining then returns the same tet whatever the threading.
   parallelFor(nCells, [&](std::size_t c0, std::size_t c1) {

@@ -84,13 +84,38 @@ std::size_t memoryOf(const openvdb::GridPtrVec& grids) {
   return bytes;
 }
 
+// One grid from the slabs' trees (disjoint leaves), named and placed in LPS millimetres.
+template <class GridT>
+typename GridT::Ptr mergedGrid(const std::vector<typename GridT::TreeType::Ptr>& trees,
+                               typename GridT::ValueType background, const std::string& name, const ImageGrid& g) {
+  auto grid = GridT::create(background);
+  for (auto& t : trees) grid->tree().merge(*t, openvdb::MERGE_ACTIVE_STATES);
+  grid->tree().prune();
+  grid->setName(name);
+  grid->setTransform(gridTransform(g));
+  grid->setGridClass(openvdb::GRID_UNKNOWN);
+  grid->insertMeta("space", openvdb::StringMetadata("LPS millimetres"));
+  return grid;
+}
+
+// Fills the report's sizes and times and writes the grids.
+void finishAndWrite(const openvdb::GridPtrVec& grids, Clock::time_point buildStart, const std::string& path,
+                    VdbWriteReport& report) {
+  report.grids = grids.size();
+  report.memoryBytes = memoryOf(grids);
+  report.buildSeconds = secondsSince(buildStart);
+  const auto t0 = Clock::now();
+  writeGrids(grids, path);
+  report.writeSeconds = secondsSince(t0);
+}
+
 }  // namespace
 
 VdbWriteReport writeLabelsVdb(const LabelVolume& labels, const std::string& path, const VdbWriteOptions& options) {
   checkVolume(labels, "label");
   initializeOnce();
   VdbWriteReport report;
-  auto t0 = Clock::now();
+  const auto t0 = Clock::now();
   const ImageGrid& g = labels.grid;
   const std::size_t slabs = std::size_t((g.dims[2] + 7) / 8);
   std::vector<openvdb::Int32Tree::Ptr> labelTrees(slabs);
@@ -128,13 +153,7 @@ VdbWriteReport writeLabelsVdb(const LabelVolume& labels, const std::string& path
       fogTrees[s][l] = entry.first;
     }
   });
-  auto labelGrid = openvdb::Int32Grid::create(0);
-  for (auto& t : labelTrees) labelGrid->tree().merge(*t, openvdb::MERGE_ACTIVE_STATES);
-  labelGrid->tree().prune();
-  labelGrid->setName("labels");
-  labelGrid->setTransform(gridTransform(g));
-  labelGrid->setGridClass(openvdb::GRID_UNKNOWN);
-  labelGrid->insertMeta("space", openvdb::StringMetadata("LPS millimetres"));
+  auto labelGrid = mergedGrid<openvdb::Int32Grid>(labelTrees, 0, "labels", g);
   openvdb::GridPtrVec grids{labelGrid};
   report.activeVoxels = std::size_t(labelGrid->activeVoxelCount());
   if (options.labelFogGrids) {
@@ -154,12 +173,7 @@ VdbWriteReport writeLabelsVdb(const LabelVolume& labels, const std::string& path
       grids.push_back(grid);
     }
   }
-  report.grids = grids.size();
-  report.memoryBytes = memoryOf(grids);
-  report.buildSeconds = secondsSince(t0);
-  t0 = Clock::now();
-  writeGrids(grids, path);
-  report.writeSeconds = secondsSince(t0);
+  finishAndWrite(grids, t0, path, report);
   return report;
 }
 
@@ -169,7 +183,7 @@ VdbWriteReport writeIntensityVdb(const IntensityVolume& image, float background,
   if (gridName.empty()) throw std::invalid_argument("vdb output: the grid needs a name");
   initializeOnce();
   VdbWriteReport report;
-  auto t0 = Clock::now();
+  const auto t0 = Clock::now();
   const ImageGrid& g = image.grid;
   const std::size_t slabs = std::size_t((g.dims[2] + 7) / 8);
   std::vector<openvdb::FloatTree::Ptr> trees(slabs);
@@ -184,21 +198,9 @@ VdbWriteReport writeIntensityVdb(const IntensityVolume& image, float background,
       }
     trees[s] = tree;
   });
-  auto grid = openvdb::FloatGrid::create(background);
-  for (auto& t : trees) grid->tree().merge(*t, openvdb::MERGE_ACTIVE_STATES);
-  grid->tree().prune();
-  grid->setName(gridName);
-  grid->setTransform(gridTransform(g));
-  grid->setGridClass(openvdb::GRID_UNKNOWN);
-  grid->insertMeta("space", openvdb::StringMetadata("LPS millimetres"));
-  openvdb::GridPtrVec grids{grid};
-  report.grids = 1;
+  auto grid = mergedGrid<openvdb::FloatGrid>(trees, background, gridName, g);
   report.activeVoxels = std::size_t(grid->activeVoxelCount());
-  report.memoryBytes = memoryOf(grids);
-  report.buildSeconds = secondsSince(t0);
-  t0 = Clock::now();
-  writeGrids(grids, path);
-  report.writeSeconds = secondsSince(t0);
+  finishAndWrite(openvdb::GridPtrVec{grid}, t0, path, report);
   return report;
 }
 
