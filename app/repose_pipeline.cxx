@@ -558,7 +558,14 @@ std::string Pipeline::relaxationSummary() const {
   if (relax_->GetModel() == 1) m << relax_->GetNewtonIterations() << " Newton iterations, ";
   m << relax_->GetCGIterations() << " CG iterations, relative residual "
     << relax_->GetRelativeResidual() << ", inverted tets " << relax_->GetInvertedBefore() << " -> "
-    << relax_->GetInvertedAfter() << ", " << relax_->GetLastRelaxTime() << " s";
+    << relax_->GetInvertedAfter()
+    << (relax_->GetInvertedRigidAfter() > 0
+          ? " (" + std::to_string(relax_->GetInvertedRigidAfter()) + " with only bone nodes)"
+          : std::string())
+    << (relax_->GetUntangledNodes() > 0 ? ", " + std::to_string(relax_->GetUntangledNodes()) + " nodes untangled"
+                                        : std::string())
+    << ", " << relax_->GetLastRelaxTime() << " s (assembly " << relax_->GetLastAssemblyTime() << " s, solves "
+    << relax_->GetLastSolveTime() << " s, untangling " << relax_->GetLastUntangleTime() << " s)";
   return m.str();
 }
 

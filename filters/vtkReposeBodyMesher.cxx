@@ -98,7 +98,7 @@ int vtkReposeBodyMesher::RequestData(
 {
   const auto start = Clock::now();
   this->NumberOfNodes = this->NumberOfTets = this->NumberOfSurfaceTriangles = 0;
-  this->NumberOfSeedPoints = this->NumberOfFixedNodes = 0;
+  this->NumberOfSeedPoints = this->NumberOfFixedNodes = this->NumberOfFreedContactNodes = 0;
   this->TotalSeconds = this->TetGenSeconds = 0;
   this->Report.clear();
 
@@ -219,6 +219,13 @@ int vtkReposeBodyMesher::RequestData(
     t = Clock::now();
     repose::reorderMeshSpatially(mesh);
     repose::tagMesh(mesh, labels, boneOfLabel);
+    const repose::ContactReport contacts = repose::freeBoneContacts(mesh);
+    this->NumberOfFreedContactNodes = contacts.nodesFreed;
+    if (contacts.bonesKept > 0)
+    {
+      vtkWarningMacro(<< contacts.bonesKept << " bone(s) touch another bone everywhere in the mesh: "
+                      << "their joints cannot bend without inverting tets");
+    }
     const repose::ComponentReport components = repose::keepBoneComponents(mesh);
     if (components.componentsDropped > 0)
     {
@@ -235,7 +242,8 @@ int vtkReposeBodyMesher::RequestData(
         ++this->NumberOfFixedNodes;
       }
     }
-    report << "tagging: " << this->NumberOfFixedNodes << " fixed nodes, " << components.componentsKept
+    report << "tagging: " << this->NumberOfFixedNodes << " fixed nodes (" << contacts.nodesFreed
+           << " freed where " << contacts.edgesBetweenBones << " edges joined two bones), " << components.componentsKept
            << " component(s) kept, " << components.componentsDropped << " dropped ("
            << components.nodesDropped << " nodes, " << components.tetsDropped << " tets) ("
            << SecondsSince(t) << " s)\n";

@@ -80,6 +80,8 @@ public:
   vtkGetMacro(NumberOfSurfaceTriangles, vtkIdType);
   vtkGetMacro(NumberOfSeedPoints, vtkIdType);
   vtkGetMacro(NumberOfFixedNodes, vtkIdType);
+  /// Bone nodes made free because a tet edge joined them to another bone's node (across a joint).
+  vtkGetMacro(NumberOfFreedContactNodes, vtkIdType);
   vtkGetMacro(TotalSeconds, double);
   vtkGetMacro(TetGenSeconds, double);
   /// Multi-line text report of the last run (counts and timings per stage).
@@ -108,6 +110,7 @@ protected:
   vtkIdType NumberOfSurfaceTriangles = 0;
   vtkIdType NumberOfSeedPoints = 0;
   vtkIdType NumberOfFixedNodes = 0;
+  vtkIdType NumberOfFreedContactNodes = 0;
   double TotalSeconds = 0;
   double TetGenSeconds = 0;
   std::string Report;

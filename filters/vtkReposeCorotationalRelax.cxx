@@ -122,7 +122,12 @@ int vtkReposeCorotationalRelax::RequestData(
     this->RelativeResidual = report.relativeResidual.empty() ? 0.0 : report.relativeResidual.back();
     this->InvertedBefore = report.invertedBefore;
     this->InvertedAfter = report.invertedAfter;
+    this->InvertedRigidAfter = report.invertedRigid;
+    this->UntangledNodes = report.untangledNodes;
     this->LastRelaxTime = report.seconds;
+    this->LastAssemblyTime = report.assemblySeconds;
+    this->LastSolveTime = report.solveSeconds;
+    this->LastUntangleTime = report.untangleSeconds;
   }
   catch (const std::exception& e)
   {

@@ -52,7 +52,15 @@ public:
   vtkGetMacro(RelativeResidual, double);   ///< of the last outer iteration
   vtkGetMacro(InvertedBefore, int);
   vtkGetMacro(InvertedAfter, int);
+  /// Inverted tets after relaxing whose nodes are all fixed to bones (no free node can repair them).
+  vtkGetMacro(InvertedRigidAfter, int);
+  /// Node moves made by the untangling step (0 when the solve left nothing inverted).
+  vtkGetMacro(UntangledNodes, int);
   vtkGetMacro(LastRelaxTime, double);
+  /// Parts of LastRelaxTime: Hessian assembly, linear solves (CG or CHOLMOD), untangling.
+  vtkGetMacro(LastAssemblyTime, double);
+  vtkGetMacro(LastSolveTime, double);
+  vtkGetMacro(LastUntangleTime, double);
 
 protected:
   vtkReposeCorotationalRelax();
@@ -74,6 +82,11 @@ protected:
   double RelativeResidual = 0;
   int InvertedBefore = 0;
   int InvertedAfter = 0;
+  int InvertedRigidAfter = 0;
+  int UntangledNodes = 0;
+  double LastAssemblyTime = 0.0;
+  double LastSolveTime = 0.0;
+  double LastUntangleTime = 0.0;
   double LastRelaxTime = 0;
 
 private:

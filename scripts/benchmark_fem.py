@@ -63,7 +63,9 @@ def child(case, model, solver, angle):
         t = time.perf_counter()
         fem.Update()
         result.update(seconds=time.perf_counter() - t, cg=fem.GetCGIterations(), newton=fem.GetNewtonIterations(),
-                      before=fem.GetInvertedBefore(), after=fem.GetInvertedAfter())
+                      before=fem.GetInvertedBefore(), after=fem.GetInvertedAfter(),
+                      rigid=fem.GetInvertedRigidAfter(), assembly=fem.GetLastAssemblyTime(),
+                      solve=fem.GetLastSolveTime(), untangle=fem.GetLastUntangleTime())
         posed = fem.GetOutput()
     cells = vtk_to_numpy(rest.GetCells().GetConnectivityArray()).reshape(-1, 4)
 
@@ -118,18 +120,20 @@ def main():
                 r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle)
                 rows.append((size, model, solver, r or base, err))
                 print(f"{size} {model} {solver}: {'done' if r else err}", file=sys.stderr)
-    print("| size | nodes | tets | model | solver | FEM s / pose | Newton its | CG its | inverted before -> after |"
-          " volume ratio | peak MiB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| size | nodes | tets | model | solver | FEM s / pose | assembly s | solves s | untangle s | Newton its |"
+          " CG its | inverted before -> after (only bone nodes) | volume ratio | peak MiB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for size, model, solver, r, err in rows:
         if err:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | failed: {err} | | | | | |")
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | failed: {err} | | | | | | | | |")
         elif "seconds" not in r:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | {r['volume_ratio']:.4f} |"
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | | | | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")
         else:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | {r['seconds']:.2f} | {r['newton']} |"
-                  f" {r['cg']} | {r['before']} -> {r['after']} | {r['volume_ratio']:.4f} | {r['peak_mib']:.0f} |")
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | {r['seconds']:.2f} |"
+                  f" {r['assembly']:.2f} | {r['solve']:.2f} | {r['untangle']:.2f} | {r['newton']} |"
+                  f" {r['cg']} | {r['before']} -> {r['after']} ({r['rigid']}) | {r['volume_ratio']:.4f} |"
+                  f" {r['peak_mib']:.0f} |")
 
 
 if __name__ == "__main__":

@@ -6,9 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <stdexcept>
 
 #include "corotational_fem.h"
+#include "signed_svd.h"
+#include "tet_untangling.h"
 #include "box_tet_mesh.h"
 #include "tet_mesh.h"
 
@@ -460,3 +463,90 @@ TEST(CorotationalFem, DISABLED_BenchmarkBentBox) {
 }
 
 }  // namespace
+
+TEST(SignedSvd, ReconstructsRotationsStretchesInversionsAndDegenerateMatrices) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n01;
+  std::vector<Eigen::Matrix3d> cases;
+  for (int i = 0; i < 400; ++i) {  // general matrices, half of them inverted
+    Eigen::Matrix3d F;
+    for (int k = 0; k < 9; ++k) F(k / 3, k % 3) = n01(rng);
+    cases.push_back(F);
+  }
+  for (int i = 0; i < 200; ++i) {  // near-rotations (most tets of a pose), clustered singular values
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(3.0 * n01(rng), Eigen::Vector3d(n01(rng), n01(rng), n01(rng)).normalized()).toRotationMatrix();
+    Eigen::Matrix3d E;
+    for (int k = 0; k < 9; ++k) E(k / 3, k % 3) = 1e-6 * n01(rng);
+    cases.push_back(R * (Eigen::Matrix3d::Identity() + E));
+  }
+  cases.push_back(Eigen::Matrix3d::Identity());
+  cases.push_back(Eigen::Vector3d(1, 1, -1).asDiagonal());             // a reflection: inverted
+  cases.push_back(Eigen::Vector3d(2, 0.5, 0).asDiagonal());            // flat
+  cases.push_back(Eigen::Vector3d(0, 3, 0).asDiagonal());              // a line
+  cases.push_back(Eigen::Matrix3d::Zero());
+  cases.push_back(someRotation() * Eigen::Vector3d(1.2, 1.2, 0.7).asDiagonal() * someRotation().transpose());
+  for (const Eigen::Matrix3d& F : cases) {
+    Eigen::Matrix3d U, V;
+    Eigen::Vector3d s;
+    repose::signedSvd(F, U, s, V);
+    const double scale = std::max(1.0, F.norm());
+    EXPECT_LT((U * s.asDiagonal() * V.transpose() - F).norm(), 1e-9 * scale) << F;
+    EXPECT_LT((U.transpose() * U - Eigen::Matrix3d::Identity()).norm(), 1e-9);
+    EXPECT_LT((V.transpose() * V - Eigen::Matrix3d::Identity()).norm(), 1e-9);
+    EXPECT_NEAR(U.determinant(), 1.0, 1e-9);
+    EXPECT_NEAR(V.determinant(), 1.0, 1e-9);
+    EXPECT_GE(s(0), std::abs(s(1)) - 1e-12 * scale);
+    EXPECT_GE(s(1), std::abs(s(2)) - 1e-9 * scale);
+    EXPECT_GE(s(1), 0.0);
+    // The magnitudes are the singular values, and the sign of the last is that of det F.
+    const Eigen::Vector3d ref = Eigen::JacobiSVD<Eigen::Matrix3d>(F).singularValues();
+    EXPECT_LT((s.cwiseAbs() - ref).norm(), 1e-9 * scale);
+    if (std::abs(F.determinant()) > 1e-9) EXPECT_EQ(s(2) < 0, F.determinant() < 0);
+  }
+}
+
+TEST(TetUntangling, FreeNodesLeaveTheFoldAndFixedNodesStay) {
+  // A 4x4x4 box with its boundary fixed; two interior nodes pushed through their neighbours.
+  const Box b = makeBox(4, 4, 4, 1.0);
+  std::vector<int> fixed(std::size_t(b.nodes.rows()), -1);
+  for (int k = 0; k < b.nz; ++k)
+    for (int j = 0; j < b.ny; ++j)
+      for (int i = 0; i < b.nx; ++i)
+        if (i == 0 || j == 0 || k == 0 || i == b.nx - 1 || j == b.ny - 1 || k == b.nz - 1) fixed[b.id(i, j, k)] = 0;
+  Points posed = b.nodes;
+  posed.row(b.id(1, 1, 1)) += Eigen::RowVector3d(1.7, 1.4, 1.6);
+  posed.row(b.id(3, 2, 2)) += Eigen::RowVector3d(-1.5, 0.3, -1.2);
+  const Points before = posed;
+  const repose::UntangleReport rep = repose::untangleTets(b.nodes, b.tets, fixed, posed);
+  EXPECT_GT(rep.invertedBefore, 4);
+  EXPECT_EQ(rep.invertedAfter, 0);
+  EXPECT_EQ(rep.invertedRigid, 0);
+  EXPECT_GT(rep.nodesMoved, 0);
+  for (Eigen::Index t = 0; t < b.tets.rows(); ++t) {
+    const double v = repose::tetVolume(posed.row(b.tets(t, 0)), posed.row(b.tets(t, 1)), posed.row(b.tets(t, 2)),
+                                       posed.row(b.tets(t, 3)));
+    EXPECT_GT(v, 0.0) << "tet " << t;
+  }
+  for (Eigen::Index i = 0; i < posed.rows(); ++i)
+    if (fixed[std::size_t(i)] >= 0) EXPECT_EQ((posed.row(i) - before.row(i)).cwiseAbs().maxCoeff(), 0.0);
+  // Nothing inverted: nothing moves.
+  Points rest = b.nodes;
+  const repose::UntangleReport none = repose::untangleTets(b.nodes, b.tets, fixed, rest);
+  EXPECT_EQ(none.invertedBefore, 0);
+  EXPECT_EQ(none.nodesMoved, 0);
+  EXPECT_EQ((rest - b.nodes).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(TetUntangling, TetsWithOnlyFixedNodesAreReportedNotMoved) {
+  const Box b = makeBox(2, 1, 1, 1.0);
+  std::vector<int> fixed(std::size_t(b.nodes.rows()), 0);
+  Points posed = b.nodes;
+  posed.row(b.id(1, 0, 0)) += Eigen::RowVector3d(0, 3, 3);  // folds tets that have only fixed nodes
+  const Points before = posed;
+  const repose::UntangleReport rep = repose::untangleTets(b.nodes, b.tets, fixed, posed);
+  EXPECT_GT(rep.invertedBefore, 0);
+  EXPECT_EQ(rep.invertedAfter, rep.invertedBefore);
+  EXPECT_EQ(rep.invertedRigid, rep.invertedAfter);
+  EXPECT_EQ((posed - before).cwiseAbs().maxCoeff(), 0.0);
+}

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "body_mask.h"
+#include "box_tet_mesh.h"
 #include "mesh_ordering.h"
 #include "mesh_tagging.h"
 #include "tet_mesher.h"
@@ -487,4 +488,53 @@ TEST(MeshOrdering, MortonRenumberingKeepsTheMesh) {
     return sum / double(tetsOf.size());
   };
   EXPECT_LT(spreadOf(mesh), 0.5 * spreadOf(before));
+}
+
+TEST(MeshTagging, NoEdgeJoinsTwoBonesAfterFreeingContacts) {
+  // A bar of 12 x 2 x 2 cubes: bone 0 is the nodes with i <= 5, bone 1 those with i >= 6, so the
+  // cubes between i = 5 and 6 join the two bones; a third bone is one node column that touches
+  // bone 1 everywhere.
+  Points V;
+  Tets T;
+  kuhnBoxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(12, 2, 2), {12, 2, 2}, V, T);
+  TetMesh mesh;
+  mesh.nodes = V;
+  mesh.tets = T;
+  mesh.fixedBone.resize(std::size_t(V.rows()));
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    const double x = V(v, 0);
+    mesh.fixedBone[std::size_t(v)] = x <= 5.5 ? 0 : (x < 11.5 ? 1 : 2);
+  }
+  const auto before = mesh.fixedBone;
+  const ContactReport rep = freeBoneContacts(mesh);
+  EXPECT_GT(rep.edgesBetweenBones, 0);
+  EXPECT_EQ(rep.bonesKept, 1);  // bone 2 would have lost every node: it stays fixed
+  int freed = 0;
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    const double x = V(v, 0);
+    const int b = mesh.fixedBone[std::size_t(v)];
+    if (x == 5 || x == 6 || x == 11) {
+      EXPECT_EQ(b, -1) << "node at x = " << x;
+      ++freed;
+    } else {
+      EXPECT_EQ(b, before[std::size_t(v)]) << "node at x = " << x;  // only contact nodes change
+    }
+  }
+  EXPECT_EQ(rep.nodesFreed, freed);
+  // No edge joins bones 0 and 1 any more (bone 2's contact with bone 1 is gone too: its neighbours
+  // at x = 11 are free now).
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        const int ba = mesh.fixedBone[std::size_t(T(t, a))], bb = mesh.fixedBone[std::size_t(T(t, b))];
+        EXPECT_FALSE(ba >= 0 && bb >= 0 && ba != bb) << "tet " << t;
+      }
+  // A second call has nothing left to do.
+  const ContactReport again = freeBoneContacts(mesh);
+  EXPECT_EQ(again.edgesBetweenBones, 0);
+  EXPECT_EQ(again.nodesFreed, 0);
+  TetMesh untagged;
+  untagged.nodes = V;
+  untagged.tets = T;
+  EXPECT_THROW(freeBoneContacts(untagged), std::invalid_argument);
 }

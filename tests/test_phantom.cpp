@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cstdio>
 #include <array>
 #include <map>
 #include <set>
@@ -333,4 +335,39 @@ TEST(Phantom, SizesDescribeTheSameBodyWithMoreVoxels) {
   }
   // describePhantom matches makePhantom.
   EXPECT_TRUE(t.labels.grid.sameGridAs(tiny().labels.grid));
+}
+
+// The hips flex without bone running into bone: each femur, turned about its hip centre through
+// extension 20 to flexion 120 degrees (also between the sampled angles), stays clear of the pelvis.
+TEST(Phantom, FemursClearThePelvisThroughHipFlexion) {
+  for (PhantomSize size : {PhantomSize::Tiny, PhantomSize::Small}) {
+    const Phantom ph = makePhantom(size);
+    const ImageGrid& g = ph.labels.grid;
+    std::vector<Eigen::Vector3d> pelvis, femur[2];
+    for (int k = 0; k < g.dims[2]; ++k)
+      for (int j = 0; j < g.dims[1]; ++j)
+        for (int i = 0; i < g.dims[0]; ++i) {
+          const int l = ph.labels.at(i, j, k);
+          const Eigen::Vector3d x = g.indexToPhysical(Eigen::Vector3d(i, j, k));
+          if (l == pl::Pelvis) pelvis.push_back(x);
+          if (l == pl::FemurLeft) femur[0].push_back(x);
+          if (l == pl::FemurRight) femur[1].push_back(x);
+        }
+    const double voxel = g.spacing.minCoeff();
+    for (int side = 0; side < 2; ++side) {
+      const Joint& hip = ph.skeleton.joints[std::size_t(jointIndex(ph.skeleton, side == 0 ? "left_hip" : "right_hip"))];
+      double worst = 1e30;
+      for (double deg = -120; deg <= 20; deg += 5) {  // flexion is a rotation about -x
+        const Eigen::Matrix3d R = Eigen::AngleAxisd(deg * 3.14159265358979 / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+        for (const Eigen::Vector3d& f : femur[side]) {
+          const Eigen::Vector3d q = hip.center + R * (f - hip.center);
+          if ((q - hip.center).norm() > 150) continue;  // only the proximal femur can reach the pelvis
+          for (const Eigen::Vector3d& p : pelvis) worst = std::min(worst, (q - p).norm());
+        }
+      }
+      EXPECT_GT(worst, voxel) << "side " << side << ", size " << int(size);
+      std::printf("size %d side %d: nearest pelvis voxel to the turning femur %.1f mm (voxel %.1f)\n", int(size), side,
+                  worst, voxel);
+    }
+  }
 }

@@ -5,7 +5,6 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-#include <Eigen/SVD>
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <atomic>
@@ -16,6 +15,8 @@
 #include <string>
 
 #include "parallel_for.h"
+#include "signed_svd.h"
+#include "tet_untangling.h"
 
 namespace repose {
 namespace {
@@ -27,17 +28,16 @@ double seconds(std::chrono::steady_clock::time_point since) {
 using Mat3 = Eigen::Matrix3d;
 using Vec3 = Eigen::Vector3d;
 using SpMat = Eigen::SparseMatrix<double>;
+using RowSpMat = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
 Vec3 node(const Points& P, int i) { return P.row(i).transpose(); }
 
 /// Rotation of F's polar decomposition, det = +1 even for inverted or degenerate F: the sign goes
 /// to the smallest singular value (Irving et al. 2004), so an inverted tet is pushed back, not flipped.
 Mat3 robustRotation(const Mat3& F) {
-  Eigen::JacobiSVD<Mat3> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Mat3 U = svd.matrixU();
-  Mat3 V = svd.matrixV();
-  if (U.determinant() < 0) U.col(2) *= -1.0;  // singular values are sorted: column 2 is the smallest
-  if (V.determinant() < 0) V.col(2) *= -1.0;
+  Mat3 U, V;
+  Vec3 sigma;
+  signedSvd(F, U, sigma, V);
   return U * V.transpose();
 }
 
@@ -52,6 +52,19 @@ int countInverted(const Points& P, const Tets& tets) {
     count += local;
   });
   return count.load();
+}
+
+/// The report's inverted counts after relaxing: all of them, and those no free node can repair.
+void countInvertedAfter(const Points& P, const Tets& tets, const std::vector<int>& fixedBone, CorotationalReport& rep) {
+  rep.invertedAfter = rep.invertedRigid = 0;
+  for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+    const auto T = tets.row(t);
+    if (tetVolume(node(P, T[0]), node(P, T[1]), node(P, T[2]), node(P, T[3])) > 0.0) continue;
+    ++rep.invertedAfter;
+    bool rigid = true;
+    for (int a = 0; a < 4; ++a) rigid = rigid && fixedBone[std::size_t(T[a])] >= 0;
+    if (rigid) ++rep.invertedRigid;
+  }
 }
 
 /// Per-tet rest data. Row k of DmInv is the gradient of shape function N_{k+1}; N_0's is minus
@@ -110,12 +123,14 @@ class SpdSolver {
       iterations = int(cg.iterations());
       residual = cg.error();
     } else {
-      // Eigen's serial CG: measured faster than a parallelFor-threaded CG (its column-major
-      // scatter product beats a threaded gather on 2 cores).
-      Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg;
+      // A is symmetric with both triangles stored, so its column-major arrays are also its row-major
+      // ones: seen row-major, Eigen's CG runs its matrix-vector products on OpenMP threads.
+      const Eigen::Map<const RowSpMat> rows(A.rows(), A.cols(), A.nonZeros(), A.outerIndexPtr(), A.innerIndexPtr(),
+                                            A.valuePtr());
+      Eigen::ConjugateGradient<RowSpMat, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg;
       cg.setTolerance(tolerance);
       cg.setMaxIterations(options_.maxCgIterations);
-      cg.compute(A);
+      cg.compute(rows);
       x = cg.solveWithGuess(b, x);
       iterations = int(cg.iterations());
       residual = cg.error();
@@ -135,12 +150,27 @@ struct TetState {
   Vec3 sigma;
 };
 
+/// The energy's volume term h(J) = lambda/2 (J - 1)^2 + kappa (eps - J)_+^2: the fixed-corotated
+/// pressure plus a barrier-like penalty below J = eps, which the fixed-corotated term alone lacks
+/// (it is finite and smooth through J = 0, so a fold can be its minimum). Returns h; p = h'(J),
+/// stiffness = h''(J).
+struct VolumeTerm {
+  double lambda, kappa, eps;
+  double operator()(double J, double& p, double& stiffness) const {
+    const double below = std::max(0.0, eps - J);
+    p = lambda * (J - 1.0) - 2.0 * kappa * below;
+    stiffness = lambda + (below > 0.0 ? 2.0 * kappa : 0.0);
+    return 0.5 * lambda * (J - 1.0) * (J - 1.0) + kappa * below * below;
+  }
+};
+
 /// Gauss-Newton minimization of the fixed-corotated energy over the free nodes (see the header).
-void relaxFixedCorotated(const Tets& tets, Points& posed, const CorotationalOptions& options,
+void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, const CorotationalOptions& options,
                          CorotationalReport& rep, const std::vector<RestTet>& restTets,
                          const std::vector<int>& fixedBone, const std::vector<int>& dof,
                          const std::vector<int>& freeNodes, const std::vector<int>& incStart,
                          const std::vector<int>& incTet, SpMat& A, SpdSolver& solver, double lambda, double mu) {
+  const VolumeTerm volumeTerm{lambda, options.inversionPenalty * lambda, options.inversionThreshold};
   const std::size_t nT = std::size_t(tets.rows()), nFree = freeNodes.size();
   const Eigen::Index n = Eigen::Index(3 * nFree);
   double edgeSum = 0;  // mean rest edge length: the scale of the step tolerance
@@ -168,15 +198,13 @@ void relaxFixedCorotated(const Tets& tets, Points& posed, const CorotationalOpti
         const Vec3 x0 = node(x, T[0]);
         for (int k = 0; k < 3; ++k) Ds.col(k) = node(x, T[k + 1]) - x0;
         const Mat3 F = Ds * rt.DmInv;
-        Eigen::JacobiSVD<Mat3> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
-        Mat3 U = svd.matrixU(), V = svd.matrixV();
-        Vec3 sigma = svd.singularValues();
-        // Irving's signed SVD: det U = det V = +1, an inverted tet gets a negative smallest stretch.
-        if (U.determinant() < 0) U.col(2) *= -1.0, sigma(2) = -sigma(2);
-        if (V.determinant() < 0) V.col(2) *= -1.0, sigma(2) = -sigma(2);
+        Mat3 U, V;
+        Vec3 sigma;
+        signedSvd(F, U, sigma, V);  // det U = det V = +1: an inverted tet has sigma(2) < 0
         const double J = sigma.prod();
         if (J <= 0.0) ++localCount;
-        localEnergy += rt.volume * (mu * (sigma - Vec3::Ones()).squaredNorm() + 0.5 * lambda * (J - 1.0) * (J - 1.0));
+        double p, stiffness;
+        localEnergy += rt.volume * (mu * (sigma - Vec3::Ones()).squaredNorm() + volumeTerm(J, p, stiffness));
         state[t] = TetState{U, V, sigma};
       }
       std::lock_guard<std::mutex> guard(lock);
@@ -187,9 +215,52 @@ void relaxFixedCorotated(const Tets& tets, Points& posed, const CorotationalOpti
     return energy;
   };
 
+  // The projected Hessian of psi in F, per tet (Smith et al. 2019): diagonal in the modes U M V^T.
+  // Twist / flip of each pair (i, j) (third index l) have eigenvalues mu (2 - 4 / (s_i + s_j)) + p s_l
+  // and 2 mu - p s_l; the scalings a 3x3 block 2 mu I + h'' cofS cofS^T + p d2J/ds2 (p = h'). Negative
+  // eigenvalues are clamped to 0. Kept per tet in the frame of U and V (pair: c = (twist + flip) / 2,
+  // d = (flip - twist) / 2; scalings: the clamped block), once per Newton iteration, so the row-wise
+  // assembly below does not redo it for each of the tet's four nodes.
+  struct TetHessian {
+    float c[3], d[3];
+    float S[3][3];
+  };
+  std::vector<TetHessian> hessian(nT);
+  static const int pairI[3] = {0, 1, 0}, pairJ[3] = {1, 2, 2}, pairL[3] = {2, 0, 1};
+  auto prepareHessians = [&]() {
+    parallelFor(nT, [&](std::size_t b, std::size_t e) {
+      for (std::size_t t = b; t < e; ++t) {
+        const Vec3& s = state[t].sigma;
+        double pressure, stiffness;
+        volumeTerm(s.prod(), pressure, stiffness);
+        const Vec3 cofS(s(1) * s(2), s(0) * s(2), s(0) * s(1));  // cof F = U diag(cofS) V^T
+        TetHessian& h = hessian[t];
+        for (int m = 0; m < 3; ++m) {
+          const double sum = s(pairI[m]) + s(pairJ[m]);
+          const double arap = std::abs(sum) > 1e-12 ? mu * (2.0 - 4.0 / sum) : 0.0;
+          const double twist = std::max(0.0, arap + pressure * s(pairL[m]));
+          const double flip = std::max(0.0, 2.0 * mu - pressure * s(pairL[m]));
+          h.c[m] = float(0.5 * (twist + flip));
+          h.d[m] = float(0.5 * (flip - twist));
+        }
+        Mat3 S = 2.0 * mu * Mat3::Identity() + stiffness * cofS * cofS.transpose();
+        S(0, 1) += pressure * s(2), S(1, 0) += pressure * s(2);
+        S(1, 2) += pressure * s(0), S(2, 1) += pressure * s(0);
+        S(0, 2) += pressure * s(1), S(2, 0) += pressure * s(1);
+        Eigen::SelfAdjointEigenSolver<Mat3> eig;
+        eig.computeDirect(S);
+        const Mat3 clamped =
+            eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) h.S[r][c] = float(clamped(r, c));
+      }
+    }, 1024);
+  };
+
   // Gradient and projected Hessian, row-wise over the free nodes (no write conflicts).
   Eigen::VectorXd grad(n);
   auto assemble = [&]() {
+    prepareHessians();
     double* values = A.valuePtr();
     const int* inner = A.innerIndexPtr();
     const int* outerIdx = A.outerIndexPtr();
@@ -204,57 +275,33 @@ void relaxFixedCorotated(const Tets& tets, Points& posed, const CorotationalOpti
           const int t = incTet[std::size_t(k)] / 4, a = incTet[std::size_t(k)] % 4;
           const RestTet& rt = restTets[std::size_t(t)];
           const TetState& st = state[std::size_t(t)];
+          const TetHessian& h = hessian[std::size_t(t)];
           const Vec3& s = st.sigma;
-          const double J = s.prod();
-          const double pressure = lambda * (J - 1.0);
-          const Vec3 cofS(s(1) * s(2), s(0) * s(2), s(0) * s(1));  // cof F = U diag(cofS) V^T
-          // Projected Newton (Smith et al. 2019): the Hessian of psi in F is diagonal in the modes
-          // U M V^T: twist / flip of each pair (i, j) (third index l) with eigenvalues
-          // mu (2 - 4 / (s_i + s_j)) + p s_l and 2 mu - p s_l, and a 3x3 block on the scalings,
-          // 2 mu I + lambda cofS cofS^T + p d2J/ds2; negative eigenvalues are clamped to 0.
-          static const int pairI[3] = {0, 1, 0}, pairJ[3] = {1, 2, 2}, pairL[3] = {2, 0, 1};
-          double twist[3], flip[3];
-          for (int m = 0; m < 3; ++m) {
-            const double sum = s(pairI[m]) + s(pairJ[m]);
-            const double arap = std::abs(sum) > 1e-12 ? mu * (2.0 - 4.0 / sum) : 0.0;
-            twist[m] = std::max(0.0, arap + pressure * s(pairL[m]));
-            flip[m] = std::max(0.0, 2.0 * mu - pressure * s(pairL[m]));
-          }
-          Mat3 S = 2.0 * mu * Mat3::Identity() + lambda * cofS * cofS.transpose();
-          S(0, 1) += pressure * s(2), S(1, 0) += pressure * s(2);
-          S(1, 2) += pressure * s(0), S(2, 1) += pressure * s(0);
-          S(0, 2) += pressure * s(1), S(2, 0) += pressure * s(1);
-          Eigen::SelfAdjointEigenSolver<Mat3> eig;
-          eig.computeDirect(S);
-          const Vec3 scaleValues = eig.eigenvalues().cwiseMax(0.0);
-          const Mat3& E = eig.eigenvectors();
+          double pressure, stiffness;
+          volumeTerm(s.prod(), pressure, stiffness);
+          const Vec3 cofS(s(1) * s(2), s(0) * s(2), s(0) * s(1));
           const Eigen::Matrix<double, 4, 3> g = gradients(rt);
-          // Each mode applied to each node's gradient (w = V^T g_b), scaled by sqrt(eigenvalue).
-          Eigen::Matrix<double, 3, 4> tv[3], fv[3], sv[3];
-          for (int bb = 0; bb < 4; ++bb) {
-            const Vec3 w = st.V.transpose() * g.row(bb).transpose();
-            for (int m = 0; m < 3; ++m) {
-              Vec3 tw = Vec3::Zero(), fl = Vec3::Zero();
-              tw(pairI[m]) = -w(pairJ[m]);
-              tw(pairJ[m]) = w(pairI[m]);
-              fl(pairI[m]) = w(pairJ[m]);
-              fl(pairJ[m]) = w(pairI[m]);
-              tv[m].col(bb) = st.U * tw * std::sqrt(0.5 * twist[m]);
-              fv[m].col(bb) = st.U * fl * std::sqrt(0.5 * flip[m]);
-              sv[m].col(bb) = st.U * E.col(m).cwiseProduct(w) * std::sqrt(scaleValues(m));
-            }
-          }
-          const Vec3 wa = st.V.transpose() * g.row(a).transpose();
+          // Each node's gradient in the frame of V.
+          const Eigen::Matrix<double, 3, 4> w = st.V.transpose() * g.transpose();
+          const Vec3 wa = w.col(a);
           // Force: P g_a with P = U diag(2 mu (s - 1) + p cofS) V^T, times the volume.
           gi += rt.volume * (st.U * (2.0 * mu * (s - Vec3::Ones()) + pressure * cofS).cwiseProduct(wa));
           for (int bb = 0; bb < 4; ++bb) {
             const int v = tets(t, bb);
             if (fixedBone[std::size_t(v)] >= 0) continue;  // Dirichlet: no increment
-            Mat3 block = Mat3::Zero();
-            for (int m = 0; m < 3; ++m)
-              block += tv[m].col(a) * tv[m].col(bb).transpose() + fv[m].col(a) * fv[m].col(bb).transpose() +
-                       sv[m].col(a) * sv[m].col(bb).transpose();
-            block *= rt.volume;
+            // Block (a, bb) in the frame of U: diag(wa) S diag(wb) plus the twist / flip pairs.
+            const Vec3 wb = w.col(bb);
+            Mat3 L;
+            for (int r = 0; r < 3; ++r)
+              for (int c = 0; c < 3; ++c) L(r, c) = wa(r) * double(h.S[r][c]) * wb(c);
+            for (int m = 0; m < 3; ++m) {
+              const int pi = pairI[m], pj = pairJ[m];
+              L(pi, pi) += double(h.c[m]) * wa(pj) * wb(pj);
+              L(pj, pj) += double(h.c[m]) * wa(pi) * wb(pi);
+              L(pi, pj) += double(h.d[m]) * wa(pj) * wb(pi);
+              L(pj, pi) += double(h.d[m]) * wa(pi) * wb(pj);
+            }
+            const Mat3 block = rt.volume * (st.U * L * st.U.transpose());
             const int col = 3 * dof[std::size_t(v)];
             const std::size_t off = std::size_t(std::lower_bound(cols, cols + 3 * rowLen, col) - cols);
             for (int cc = 0; cc < 3; ++cc) {
@@ -274,55 +321,71 @@ void relaxFixedCorotated(const Tets& tets, Points& posed, const CorotationalOpti
   Points trial = posed;
   Eigen::VectorXd step(n);
   double firstNorm = -1.0;
-  for (int it = 0; it < options.maxNewtonIterations; ++it) {
-    const auto assemblyStart = std::chrono::steady_clock::now();
-    assemble();
-    rep.assemblySeconds += seconds(assemblyStart);
-    const double gradNorm = grad.norm();
-    if (firstNorm < 0) firstNorm = gradNorm;
-    if (!(gradNorm > 0.0)) {
-      rep.converged = true;
-      break;
-    }
-    // Inexact Newton: the CG tolerance tightens as the gradient falls.
-    const double eta = std::clamp(gradNorm / firstNorm, options.tolerance, 0.1);
-    const auto solveStart = std::chrono::steady_clock::now();
-    step.setZero();
-    int iterations = 0;
-    double residual = 0.0;
-    solver.solve(A, -grad, step, eta, iterations, residual);
-    rep.solveSeconds += seconds(solveStart);
-    rep.cgIterations.push_back(iterations);
-    rep.relativeResidual.push_back(residual);
-    rep.newtonIterations = rep.outerIterations = it + 1;
+  auto newton = [&](int maxIterations) {
+    for (int it = 0; it < maxIterations; ++it) {
+      const auto assemblyStart = std::chrono::steady_clock::now();
+      assemble();
+      rep.assemblySeconds += seconds(assemblyStart);
+      const double gradNorm = grad.norm();
+      if (firstNorm < 0) firstNorm = gradNorm;
+      if (!(gradNorm > 0.0)) {
+        rep.converged = true;
+        return;
+      }
+      // Inexact Newton: the CG tolerance tightens as the gradient falls.
+      const double eta = std::clamp(gradNorm / firstNorm, options.tolerance, 0.1);
+      const auto solveStart = std::chrono::steady_clock::now();
+      step.setZero();
+      int iterations = 0;
+      double residual = 0.0;
+      solver.solve(A, -grad, step, eta, iterations, residual);
+      rep.solveSeconds += seconds(solveStart);
+      rep.cgIterations.push_back(iterations);
+      rep.relativeResidual.push_back(residual);
+      rep.newtonIterations = rep.outerIterations = rep.newtonIterations + 1;
 
-    double maxMove = 0;
-    for (std::size_t i = 0; i < nFree; ++i) maxMove = std::max(maxMove, step.segment<3>(Eigen::Index(3 * i)).norm());
-    const double slope = grad.dot(step);
-    double alpha = 1.0;
-    bool accepted = false, smallDecrease = false;
-    for (int halving = 0; halving < 40 && alpha * maxMove > 1e-3 * stepLimit; ++halving, alpha *= 0.5) {
-      for (std::size_t i = 0; i < nFree; ++i)
-        trial.row(freeNodes[i]) = posed.row(freeNodes[i]) + alpha * step.segment<3>(Eigen::Index(3 * i)).transpose();
-      int trialInverted = 0;
-      const double trialEnergy = evaluate(trial, trialInverted);
-      if (trialInverted <= inverted && trialEnergy <= energy + 1e-4 * alpha * std::min(slope, 0.0)) {
-        smallDecrease = energy - trialEnergy < options.energyTolerance * energy;
-        energy = trialEnergy;
-        inverted = trialInverted;
-        accepted = true;
-        break;
+      double maxMove = 0;
+      for (std::size_t i = 0; i < nFree; ++i) maxMove = std::max(maxMove, step.segment<3>(Eigen::Index(3 * i)).norm());
+      const double slope = grad.dot(step);
+      double alpha = 1.0;
+      bool accepted = false, smallDecrease = false;
+      for (int halving = 0; halving < 40 && alpha * maxMove > 1e-3 * stepLimit; ++halving, alpha *= 0.5) {
+        for (std::size_t i = 0; i < nFree; ++i)
+          trial.row(freeNodes[i]) = posed.row(freeNodes[i]) + alpha * step.segment<3>(Eigen::Index(3 * i)).transpose();
+        int trialInverted = 0;
+        const double trialEnergy = evaluate(trial, trialInverted);
+        if (trialInverted <= inverted && trialEnergy <= energy + 1e-4 * alpha * std::min(slope, 0.0)) {
+          smallDecrease = energy - trialEnergy < options.energyTolerance * energy;
+          energy = trialEnergy;
+          inverted = trialInverted;
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted) {  // no descent left at this precision: at the minimum
+        rep.converged = maxMove < stepLimit;
+        evaluate(posed, inverted);  // the per-tet state of the iterate, not of the last trial
+        return;
+      }
+      for (std::size_t i = 0; i < nFree; ++i) posed.row(freeNodes[i]) = trial.row(freeNodes[i]);
+      if (alpha * maxMove < stepLimit || smallDecrease) {
+        rep.converged = true;
+        return;
       }
     }
-    if (!accepted) {  // no descent left at this precision: at the minimum
-      rep.converged = maxMove < stepLimit;
-      break;
-    }
-    for (std::size_t i = 0; i < nFree; ++i) posed.row(freeNodes[i]) = trial.row(freeNodes[i]);
-    if (alpha * maxMove < stepLimit || smallDecrease) {
-      rep.converged = true;
-      break;
-    }
+  };
+  newton(options.maxNewtonIterations);
+  // The energy is finite through det F = 0, so a few tets may settle inverted: move their free
+  // nodes out of the fold, then let Newton smooth the neighbourhood (it never re-inverts a tet);
+  // Newton's moves may open room for another round.
+  for (int round = 0; round < 3 && inverted > 0 && options.untangle; ++round) {
+    const auto untangleStart = std::chrono::steady_clock::now();
+    const UntangleReport u = untangleTets(rest, tets, fixedBone, posed);
+    rep.untangledNodes += u.nodesMoved;
+    rep.untangleSeconds += seconds(untangleStart);
+    if (u.nodesMoved == 0) break;
+    energy = evaluate(posed, inverted);
+    newton(std::max(1, options.maxNewtonIterations / 2));
   }
   rep.energyAfter = energy;
 }
@@ -357,6 +420,10 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     throw std::invalid_argument("relaxCorotational: stepTolerance must be positive");
   if (!(options.energyTolerance >= 0.0))
     throw std::invalid_argument("relaxCorotational: energyTolerance must be >= 0");
+  if (!(options.inversionPenalty >= 0.0) || !std::isfinite(options.inversionPenalty))
+    throw std::invalid_argument("relaxCorotational: inversionPenalty must be >= 0");
+  if (!(options.inversionThreshold >= 0.0 && options.inversionThreshold < 1.0))
+    throw std::invalid_argument("relaxCorotational: inversionThreshold must be in [0, 1)");
   for (Eigen::Index t = 0; t < nT; ++t)
     for (int a = 0; a < 4; ++a)
       if (tets(t, a) < 0 || tets(t, a) >= nV)
@@ -480,9 +547,9 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
 
   SpdSolver solver(options);
   if (options.model == CorotationalOptions::FixedCorotated) {
-    relaxFixedCorotated(tets, posed, options, rep, restTets, fixedBone, dof, freeNodes, incStart, incTet, A, solver,
+    relaxFixedCorotated(rest, tets, posed, options, rep, restTets, fixedBone, dof, freeNodes, incStart, incTet, A, solver,
                         lambda, mu);
-    rep.invertedAfter = countInverted(posed, tets);
+    countInvertedAfter(posed, tets, fixedBone, rep);
     rep.seconds = seconds(start);
     return;
   }
@@ -561,7 +628,12 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     rep.relativeResidual.push_back(residual);
     rep.outerIterations = outer + 1;
   }
-  rep.invertedAfter = countInverted(posed, tets);
+  if (options.untangle && countInverted(posed, tets) > 0) {
+    const auto untangleStart = std::chrono::steady_clock::now();
+    rep.untangledNodes = untangleTets(rest, tets, fixedBone, posed).nodesMoved;
+    rep.untangleSeconds = seconds(untangleStart);
+  }
+  countInvertedAfter(posed, tets, fixedBone, rep);
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

@@ -31,6 +31,7 @@ struct CorotationalOptions {
   /// volume is only kept to first order (sum of the principal stretches, not their product).
   /// FixedCorotated: the nonlinear, inversion-safe energy
   ///   psi(F) = mu |F - R|^2 + lambda/2 (det F - 1)^2   (Stomakhin et al. 2012)
+  /// plus the inversion penalty below
   /// minimized by Gauss-Newton (its Hessian 2 mu (g_a.g_b) I + lambda (cof F g_a)(cof F g_b)^T is
   /// PSD even for inverted tets) with PCG and a backtracking line search that accepts a step only
   /// if it lowers the energy and does not increase the number of inverted tets.
@@ -43,6 +44,16 @@ struct CorotationalOptions {
   double stepTolerance = 1e-3;
   /// FixedCorotated: also stops when an iteration lowers the energy by less than this fraction.
   double energyTolerance = 1e-6;
+  /// FixedCorotated: a penalty inversionPenalty * lambda * (inversionThreshold - det F)^2 is added
+  /// to each tet's energy density below det F = inversionThreshold. The fixed-corotated energy is
+  /// finite through det F = 0, so without it a fold can be a minimum (where skinning drives tissue
+  /// into tissue, e.g. in a deep crease); the penalty leaves tets with det F above the threshold
+  /// (all but the most compressed) untouched. 0 turns it off.
+  double inversionPenalty = 10.0;
+  double inversionThreshold = 0.1;
+  /// Tets still inverted after the solve get their free nodes moved out of the fold (see
+  /// tet_untangling.h); FixedCorotated then resumes Newton from there.
+  bool untangle = true;
 };
 
 struct CorotationalReport {
@@ -58,6 +69,9 @@ struct CorotationalReport {
   double energyBefore = 0.0;             ///< FixedCorotated: elastic energy of the input pose
   double energyAfter = 0.0;              ///< ... and of the result
   bool converged = false;                ///< FixedCorotated: the step tolerance was reached
+  int untangledNodes = 0;                ///< node moves made by the untangling step
+  double untangleSeconds = 0.0;          ///< ... and its time
+  int invertedRigid = 0;                 ///< inverted tets after relaxing whose nodes are all fixed
 };
 
 /// Relaxes posed to the static equilibrium of corotational linear elasticity.

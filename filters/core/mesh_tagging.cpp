@@ -5,6 +5,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "parallel_for.h"
 
@@ -138,6 +139,47 @@ void tagMesh(TetMesh& mesh, const LabelVolume& labels, const std::vector<int>& b
       mesh.tetLabel[t] = labels.data[nearestVoxel(g, 0.25 * c)];
     }
   });
+}
+
+ContactReport freeBoneContacts(TetMesh& mesh) {
+  const Eigen::Index nv = mesh.nodes.rows(), nt = mesh.tets.rows();
+  if (mesh.fixedBone.size() != std::size_t(nv))
+    throw std::invalid_argument("free bone contacts: the mesh is not tagged; call tagMesh first");
+  ContactReport report;
+  std::vector<std::uint8_t> freed(std::size_t(nv), 0);
+  // An edge is shared by several tets: collect and deduplicate (few: only those across joints).
+  std::vector<std::pair<int, int>> edges;
+  for (Eigen::Index t = 0; t < nt; ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        const int u = mesh.tets(t, a), v = mesh.tets(t, b);
+        const int bu = mesh.fixedBone[std::size_t(u)], bv = mesh.fixedBone[std::size_t(v)];
+        if (bu < 0 || bv < 0 || bu == bv) continue;
+        edges.emplace_back(std::min(u, v), std::max(u, v));
+        freed[std::size_t(u)] = freed[std::size_t(v)] = 1;
+      }
+  std::sort(edges.begin(), edges.end());
+  report.edgesBetweenBones = int(std::unique(edges.begin(), edges.end()) - edges.begin());
+  if (report.edgesBetweenBones == 0) return report;
+
+  // A bone must keep some fixed node, or it could not be posed at all.
+  int bones = 0;
+  for (int b : mesh.fixedBone) bones = std::max(bones, b + 1);
+  std::vector<int> kept(std::size_t(bones), 0);
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (mesh.fixedBone[std::size_t(v)] >= 0 && !freed[std::size_t(v)]) ++kept[std::size_t(mesh.fixedBone[std::size_t(v)])];
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    const int b = mesh.fixedBone[std::size_t(v)];
+    if (b < 0 || !freed[std::size_t(v)]) continue;
+    if (kept[std::size_t(b)] == 0) continue;  // the whole bone touches another one: keep it rigid
+    mesh.fixedBone[std::size_t(v)] = -1;
+    ++report.nodesFreed;
+  }
+  for (int b = 0; b < bones; ++b)
+    if (kept[std::size_t(b)] == 0 &&
+        std::find(mesh.fixedBone.begin(), mesh.fixedBone.end(), b) != mesh.fixedBone.end())
+      ++report.bonesKept;
+  return report;
 }
 
 ComponentReport keepBoneComponents(TetMesh& mesh) {

@@ -18,6 +18,19 @@ Points boneSeedPoints(const LabelVolume& labels, const std::vector<int>& boneOfL
 /// mesh.tetLabel (label of the nearest voxel at each tet's centroid).
 void tagMesh(TetMesh& mesh, const LabelVolume& labels, const std::vector<int>& boneOfLabel);
 
+struct ContactReport {
+  int edgesBetweenBones = 0;  ///< edges that joined nodes fixed to two different bones
+  int nodesFreed = 0;         ///< fixed nodes made free so that no such edge is left
+  int bonesKept = 0;          ///< bones whose nodes all touched another bone: left fixed (edges remain)
+};
+
+/// Frees every fixed node that shares a tet edge with a node fixed to another bone. Such an edge
+/// spans a joint: with both ends rigid, bending the joint shears or inverts the tets around it and
+/// nothing (skinning weights, FEM) can repair them. After this no edge joins two bones' fixed nodes,
+/// so every tet between two bones has a free node. A bone that would lose all its fixed nodes keeps
+/// them (reported in bonesKept). Call after tagMesh.
+ContactReport freeBoneContacts(TetMesh& mesh);
+
 struct ComponentReport {
   int componentsKept = 0, componentsDropped = 0;
   int nodesDropped = 0, tetsDropped = 0;

@@ -1,5 +1,6 @@
 #include "phantom.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -143,11 +144,30 @@ struct Shape {
   }
 };
 
+/// A bone this one keeps `gap` away from, at rest and through a joint's range of motion: poses[k]
+/// maps a point of the carved bone into the carver's frame for the k-th sampled relative rotation
+/// about `centre` (identity first). Real joints do not collide within their range; neither may the
+/// phantom's, or no deformation of the tissue between two bones could stay un-inverted.
+struct Carver {
+  int bone = -1;
+  V3 centre = V3::Zero();
+  std::vector<Eigen::Matrix3d> poses{Eigen::Matrix3d::Identity()};
+};
+
 struct Bone {
   int label = 0;
   Shape shape;
-  std::vector<int> carvers;  // indices of bones this one keeps `gap` away from
+  std::vector<Carver> carvers;
 };
+
+/// Relative rotations of a joint about x (flexion / extension) from x0 to x1 degrees, every `step`.
+std::vector<Eigen::Matrix3d> flexionRange(double x0, double x1, double step = 10) {
+  std::vector<Eigen::Matrix3d> out{Eigen::Matrix3d::Identity()};
+  const double d2r = 3.14159265358979323846 / 180;
+  for (double x = x0; x <= x1 + 1e-9; x += step)
+    out.push_back(Eigen::AngleAxisd(x * d2r, V3::UnitX()).toRotationMatrix());
+  return out;
+}
 
 struct Organ {
   int label = 0;
@@ -223,7 +243,14 @@ Model buildModel(PhantomSize size) {
     return m.bones.back();
   };
   // Carvers are set after all bones exist (indices by label).
-  struct CarveRule { int bone, carver; };
+  // Carvers are swept through their joint's range when `range` is set: `carverMoves` says whether
+  // the carver is the joint's moving (child) bone or the carved one is.
+  struct CarveRule {
+    int bone, carver;
+    V3 centre = V3::Zero();
+    std::vector<Eigen::Matrix3d> range = {};
+    bool carverMoves = false;
+  };
   std::vector<CarveRule> rules;
 
   Skeleton& sk = m.skeleton;
@@ -248,8 +275,10 @@ Model buildModel(PhantomSize size) {
       const V3 u = V3(-side * 0.75, -0.65, 0).normalized();
       b.shape.add(capsule(hip + (headR + g + 16) * u, P(0, -48, 905), 11));
     }
-    rules.push_back({Pelvis, FemurLeft});
-    rules.push_back({Pelvis, FemurRight});
+    // Hip range: flexion 120 degrees (rotation about -x), extension 20.
+    for (double side : {1.0, -1.0})
+      rules.push_back({Pelvis, side > 0 ? FemurLeft : FemurRight, P(side * (legX + 4), 5, 920),
+                       flexionRange(-120, 20), true});
     rules.push_back({Pelvis, Spine});
   }
   {
@@ -356,7 +385,17 @@ Model buildModel(PhantomSize size) {
       if (m.bones[i].label == label) return int(i);
     throw std::logic_error("phantom: missing bone");
   };
-  for (const CarveRule& r : rules) m.bones[indexOf(r.bone)].carvers.push_back(indexOf(r.carver));
+  for (const CarveRule& r : rules) {
+    Carver c;
+    c.bone = indexOf(r.carver);
+    c.centre = r.centre;
+    // A point p of the carved bone meets the carver after the relative rotation M when
+    // centre + M^T (p - centre) is in the carver (carver moving) or centre + M (p - centre) is
+    // (carved bone moving).
+    for (const Eigen::Matrix3d& M : r.range) c.poses.push_back(r.carverMoves ? Eigen::Matrix3d(M.transpose()) : M);
+    if (!r.range.empty()) c.poses.erase(c.poses.begin());  // the range holds the identity already
+    m.bones[indexOf(r.bone)].carvers.push_back(c);
+  }
 
   // ---- organs, highest priority first
   m.organs.push_back({Heart, ellipsoid(P(15, -30, 1170), V3(45, 35, 48))});
@@ -492,9 +531,13 @@ Phantom makePhantom(PhantomSize size) {
             const Bone& bone = m.bones[b];
             if (!bone.shape.inBox(p) || bone.shape.sdf(p) > 0) continue;
             bool carved = false;
-            for (int c : bone.carvers) {
-              const Shape& cs = m.bones[c].shape;
-              if (cs.inBox(p, gap) && cs.distanceBound(p) <= gap) { carved = true; break; }
+            for (const Carver& c : bone.carvers) {
+              const Shape& cs = m.bones[std::size_t(c.bone)].shape;
+              for (const Eigen::Matrix3d& M : c.poses) {
+                const V3 q = c.centre + M * (p - c.centre);
+                if (cs.inBox(q, gap) && cs.distanceBound(q) <= gap) { carved = true; break; }
+              }
+              if (carved) break;
             }
             if (!carved) { label = bone.label; break; }
           }
