@@ -96,6 +96,18 @@ inline double ceilFast(double x) {
   return i + (i < x);
 }
 
+// Same as int(floorFast(x)) / int(ceilFast(x)) for the integer results the lattice needs.
+inline int floorInt(double x) {
+  x = std::min(std::max(x, -1e9), 1e9);
+  const int i = static_cast<int>(x);
+  return i - (double(i) > x);
+}
+inline int ceilInt(double x) {
+  x = std::min(std::max(x, -1e9), 1e9);
+  const int i = static_cast<int>(x);
+  return i + (double(i) < x);
+}
+
 // Rest tet well inside the rest grid (the slack around a tet is far below 1e-3 voxels).
 bool restInside(const Vertices& r, const int restDims[3]) {
   bool in = true;
@@ -107,22 +119,10 @@ bool restInside(const Vertices& r, const int restDims[3]) {
   return in;
 }
 
-// p: posed vertices (output index space), r: rest vertices (rest index space). False if degenerate.
-bool setupTet(const Vertices& p, const Vertices& r, TetSetup& s) {
-  double e[3][3];
-  for (int q = 0; q < 3; ++q)
-    for (int m = 0; m < 3; ++m) e[q][m] = p[q + 1][m] - p[0][m];
-  // Rows of the inverse of [e0 e1 e2] (columns): cross products over the determinant.
-  double n[3][3];
-  for (int q = 0; q < 3; ++q) {
-    const double* u = e[(q + 1) % 3];
-    const double* v = e[(q + 2) % 3];
-    n[q][0] = u[1] * v[2] - u[2] * v[1];
-    n[q][1] = u[2] * v[0] - u[0] * v[2];
-    n[q][2] = u[0] * v[1] - u[1] * v[0];
-  }
-  const double det = e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
-  if (!(std::abs(det) > 0)) return false;
+// p: posed vertices (output index space), r: rest vertices (rest index space); n: rows of the inverse of
+// the edge matrix [p1-p0 p2-p0 p3-p0] (columns) times det, i.e. cross products of the edges, and det
+// (non-zero), as the caller computed them for the orientation test.
+void setupTet(const Vertices& p, const Vertices& r, const double n[3][3], double det, TetSetup& s) {
   const double inv = 1.0 / det;
   for (int a = 0; a < 4; ++a) s.c[a] = 0;
   for (int q = 0; q < 3; ++q) {
@@ -143,7 +143,6 @@ bool setupTet(const Vertices& p, const Vertices& r, TetSetup& s) {
     s.vy[a] = p[a][1];
     s.vz[a] = p[a][2];
   }
-  return true;
 }
 
 // Rest map r = A x + b of a set-up tet: the affine map taking the posed vertices to the rest ones.
@@ -291,6 +290,33 @@ void inflate(const Vertices& p, const float* delta, Vertices& q) {
     for (int m = 0; m < 3; ++m) q[c][m] = (1.0 + S) * p[c][m] - sum[m];
 }
 
+// Setup of the tet inflated by λ_a >= -δ_a (q: its posed vertices) from the tet's own setup `s`: its
+// barycentrics are (λ_a + δ_a) / (1 + Σδ), and the homothety moves the posed and rest vertices alike,
+// so the rest map is the tet's.
+void inflatedSetup(const TetSetup& s, const Vertices& q, const float* delta, TetSetup& x) {
+  double S = 0;
+  for (int a = 0; a < 4; ++a) S += delta[a];
+  const double w = 1.0 / (1.0 + S);
+  for (int a = 0; a < 4; ++a) {
+    for (int m = 0; m < 3; ++m) x.g[a][m] = s.g[a][m] * w;
+    x.c[a] = (s.c[a] - kBaryEps + delta[a]) * w + kBaryEps;
+  }
+  for (int m = 0; m < 3; ++m) {
+    for (int k = 0; k < 3; ++k) x.A[m][k] = s.A[m][k];
+    x.b[m] = s.b[m];
+    x.lo[m] = std::min(std::min(q[0][m], q[1][m]), std::min(q[2][m], q[3][m]));
+    x.hi[m] = std::max(std::max(q[0][m], q[1][m]), std::max(q[2][m], q[3][m]));
+    x.p0[m] = q[0][m];
+  }
+  for (int a = 0; a < 4; ++a) {
+    x.vy[a] = q[a][1];
+    x.vz[a] = q[a][2];
+  }
+  x.rest = nullptr;
+  x.mapReady = true;
+  x.restInside = false;
+}
+
 // Distance (mm) of a voxel of row (j, k) beyond the boundary faces of the (uninflated) tet it is
 // extrapolated from: max over relaxed faces a of -λ_a h_a, with λ_a linear in i.
 struct FaceDistance {
@@ -346,16 +372,22 @@ inline void loadVertices(const std::vector<float>& X, const Tets& tets, std::siz
   }
 }
 
-// Voxel centres of the box within the tet's bounding box (same rounding as scanTet): [lo, hi] per axis;
-// false if there are none.
-inline bool latticeBox(const Vertices& p, const Box& box, int lo[3], int hi[3]) {
+// Voxel centres of the box within the bounding box of posed tet t (same rounding as scanTet): [lo, hi]
+// per axis; false if there are none. Read straight from the float node coordinates X (the float
+// extremes convert exactly): a per-tet test, and much cheaper than going through a Vertices copy.
+inline bool latticeBox(const std::vector<float>& X, const Tets& tets, std::size_t t, const Box& box, int lo[3],
+                       int hi[3]) {
+  const float* v0 = X.data() + std::size_t(tets(t, 0)) * 3;
+  const float* v1 = X.data() + std::size_t(tets(t, 1)) * 3;
+  const float* v2 = X.data() + std::size_t(tets(t, 2)) * 3;
+  const float* v3 = X.data() + std::size_t(tets(t, 3)) * 3;
   bool any = true;
   for (int m = 0; m < 3; ++m) {
-    const double a = std::min(std::min(p[0][m], p[1][m]), std::min(p[2][m], p[3][m]));
-    const double b = std::max(std::max(p[0][m], p[1][m]), std::max(p[2][m], p[3][m]));
-    lo[m] = int(std::max(double(box.lo[m]), ceilFast(a - 1e-6)));
-    hi[m] = int(std::min(double(box.hi[m]), floorFast(b + 1e-6)));
-    any = any && lo[m] <= hi[m];
+    const double a = double(std::min(std::min(v0[m], v1[m]), std::min(v2[m], v3[m]))) - 1e-6;
+    const double b = double(std::max(std::max(v0[m], v1[m]), std::max(v2[m], v3[m]))) + 1e-6;
+    lo[m] = std::max(box.lo[m], ceilInt(a));
+    hi[m] = std::min(box.hi[m], floorInt(b));
+    any &= lo[m] <= hi[m];
   }
   return any;
 }
@@ -586,7 +618,7 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
   const std::size_t nChunks = std::min<std::size_t>(512, std::max<std::size_t>(1, nT / 4096));
   std::vector<ChunkSamples<T>> chunks(nChunks);
   parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    Vertices p, r, q, qr;
+    Vertices p, r, q;
     TetSetup st, xs, sm;
     float delta[4];
     for (std::size_t c = cb; c < ce; ++c) {
@@ -594,8 +626,12 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
       C.cover.resize(std::size_t(nRanges));
       C.extend.resize(std::size_t(nRanges));
       for (std::size_t t = c * nT / nChunks, te = (c + 1) * nT / nChunks; t < te; ++t) {
+        // Tets finer than the voxels often hold no voxel centre at all.
+        int lb[3], ub[3];
+        const bool covers = latticeBox(P, tets, t, W, lb, ub);
+        const bool extends = boundary && boundary[t];
         loadVertices(P, tets, t, p);
-        // Edges, and the rows of their inverse times det (as in setupTet).
+        // Edges, and the rows of their inverse times det (for setupTet).
         double e[3][3], n[3][3];
         for (int q1 = 0; q1 < 3; ++q1)
           for (int m = 0; m < 3; ++m) e[q1][m] = p[q1 + 1][m] - p[0][m];
@@ -616,10 +652,6 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           ++C.inverted;
           continue;
         }
-        // Tets finer than the voxels often hold no voxel centre at all.
-        int lb[3], ub[3];
-        const bool covers = latticeBox(p, W, lb, ub);
-        const bool extends = boundary && boundary[t];
         if (!covers && !extends) continue;
         const int candidates = covers ? (ub[0] - lb[0] + 1) * (ub[1] - lb[1] + 1) * (ub[2] - lb[2] + 1) : 0;
         if (candidates > 0 && candidates <= 8) {
@@ -656,7 +688,7 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           if (!extends) continue;
         }
         loadVertices(R, tets, t, r);
-        if (!setupTet(p, r, st)) continue;
+        setupTet(p, r, n, det, st);
         if (candidates > 8) {
           st.restInside = restInside(r, restDims);
           scanTet(st, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
@@ -672,9 +704,8 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           delta[a] = (boundary[t] >> a) & 1 ? float(distance * g.cwiseProduct(invSpacing).norm()) : 0.0f;
         }
         inflate(p, delta, q);
-        inflate(r, delta, qr);
-        if (!setupTet(q, qr, xs)) continue;
-        xs.restInside = false;
+        setupMap(st);
+        inflatedSetup(st, q, delta, xs);
         FaceDistance fd;
         for (int a = 0; a < 4; ++a) fd.h[a] = delta[a] > 0 ? distance / delta[a] : 0.0;  // h_a = d / δ_a
         scanTet(xs, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
