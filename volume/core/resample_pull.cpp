@@ -96,6 +96,18 @@ inline double ceilFast(double x) {
   return i + (i < x);
 }
 
+// Same as int(floorFast(x)) / int(ceilFast(x)) for the integer results the lattice needs.
+inline int floorInt(double x) {
+  x = std::min(std::max(x, -1e9), 1e9);
+  const int i = static_cast<int>(x);
+  return i - (double(i) > x);
+}
+inline int ceilInt(double x) {
+  x = std::min(std::max(x, -1e9), 1e9);
+  const int i = static_cast<int>(x);
+  return i + (double(i) < x);
+}
+
 // Rest tet well inside the rest grid (the slack around a tet is far below 1e-3 voxels).
 bool restInside(const Vertices& r, const int restDims[3]) {
   bool in = true;
@@ -107,22 +119,10 @@ bool restInside(const Vertices& r, const int restDims[3]) {
   return in;
 }
 
-// p: posed vertices (output index space), r: rest vertices (rest index space). False if degenerate.
-bool setupTet(const Vertices& p, const Vertices& r, TetSetup& s) {
-  double e[3][3];
-  for (int q = 0; q < 3; ++q)
-    for (int m = 0; m < 3; ++m) e[q][m] = p[q + 1][m] - p[0][m];
-  // Rows of the inverse of [e0 e1 e2] (columns): cross products over the determinant.
-  double n[3][3];
-  for (int q = 0; q < 3; ++q) {
-    const double* u = e[(q + 1) % 3];
-    const double* v = e[(q + 2) % 3];
-    n[q][0] = u[1] * v[2] - u[2] * v[1];
-    n[q][1] = u[2] * v[0] - u[0] * v[2];
-    n[q][2] = u[0] * v[1] - u[1] * v[0];
-  }
-  const double det = e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
-  if (!(std::abs(det) > 0)) return false;
+// p: posed vertices (output index space), r: rest vertices (rest index space); n: rows of the inverse of
+// the edge matrix [p1-p0 p2-p0 p3-p0] (columns) times det, i.e. cross products of the edges, and det
+// (non-zero), as the caller computed them for the orientation test.
+void setupTet(const Vertices& p, const Vertices& r, const double n[3][3], double det, TetSetup& s) {
   const double inv = 1.0 / det;
   for (int a = 0; a < 4; ++a) s.c[a] = 0;
   for (int q = 0; q < 3; ++q) {
@@ -143,7 +143,6 @@ bool setupTet(const Vertices& p, const Vertices& r, TetSetup& s) {
     s.vy[a] = p[a][1];
     s.vz[a] = p[a][2];
   }
-  return true;
 }
 
 // Rest map r = A x + b of a set-up tet: the affine map taking the posed vertices to the rest ones.
@@ -291,6 +290,33 @@ void inflate(const Vertices& p, const float* delta, Vertices& q) {
     for (int m = 0; m < 3; ++m) q[c][m] = (1.0 + S) * p[c][m] - sum[m];
 }
 
+// Setup of the tet inflated by λ_a >= -δ_a (q: its posed vertices) from the tet's own setup `s`: its
+// barycentrics are (λ_a + δ_a) / (1 + Σδ), and the homothety moves the posed and rest vertices alike,
+// so the rest map is the tet's.
+void inflatedSetup(const TetSetup& s, const Vertices& q, const float* delta, TetSetup& x) {
+  double S = 0;
+  for (int a = 0; a < 4; ++a) S += delta[a];
+  const double w = 1.0 / (1.0 + S);
+  for (int a = 0; a < 4; ++a) {
+    for (int m = 0; m < 3; ++m) x.g[a][m] = s.g[a][m] * w;
+    x.c[a] = (s.c[a] - kBaryEps + delta[a]) * w + kBaryEps;
+  }
+  for (int m = 0; m < 3; ++m) {
+    for (int k = 0; k < 3; ++k) x.A[m][k] = s.A[m][k];
+    x.b[m] = s.b[m];
+    x.lo[m] = std::min(std::min(q[0][m], q[1][m]), std::min(q[2][m], q[3][m]));
+    x.hi[m] = std::max(std::max(q[0][m], q[1][m]), std::max(q[2][m], q[3][m]));
+    x.p0[m] = q[0][m];
+  }
+  for (int a = 0; a < 4; ++a) {
+    x.vy[a] = q[a][1];
+    x.vz[a] = q[a][2];
+  }
+  x.rest = nullptr;
+  x.mapReady = true;
+  x.restInside = false;
+}
+
 // Distance (mm) of a voxel of row (j, k) beyond the boundary faces of the (uninflated) tet it is
 // extrapolated from: max over relaxed faces a of -λ_a h_a, with λ_a linear in i.
 struct FaceDistance {
@@ -324,10 +350,11 @@ struct Box {
   }
 };
 
-// One voxel's value from one tet: `v` is the voxel's index in the work box.
+// One voxel's value from one tet: `v` is the voxel's index in the work box minus the first index of its
+// z-range (32 bits halve the samples' memory traffic).
 template <class T>
 struct Sample {
-  std::size_t v;
+  std::uint32_t v;
   T value;
 };
 
@@ -346,16 +373,22 @@ inline void loadVertices(const std::vector<float>& X, const Tets& tets, std::siz
   }
 }
 
-// Voxel centres of the box within the tet's bounding box (same rounding as scanTet): [lo, hi] per axis;
-// false if there are none.
-inline bool latticeBox(const Vertices& p, const Box& box, int lo[3], int hi[3]) {
+// Voxel centres of the box within the bounding box of posed tet t (same rounding as scanTet): [lo, hi]
+// per axis; false if there are none. Read straight from the float node coordinates X (the float
+// extremes convert exactly): a per-tet test, and much cheaper than going through a Vertices copy.
+inline bool latticeBox(const std::vector<float>& X, const Tets& tets, std::size_t t, const Box& box, int lo[3],
+                       int hi[3]) {
+  const float* v0 = X.data() + std::size_t(tets(t, 0)) * 3;
+  const float* v1 = X.data() + std::size_t(tets(t, 1)) * 3;
+  const float* v2 = X.data() + std::size_t(tets(t, 2)) * 3;
+  const float* v3 = X.data() + std::size_t(tets(t, 3)) * 3;
   bool any = true;
   for (int m = 0; m < 3; ++m) {
-    const double a = std::min(std::min(p[0][m], p[1][m]), std::min(p[2][m], p[3][m]));
-    const double b = std::max(std::max(p[0][m], p[1][m]), std::max(p[2][m], p[3][m]));
-    lo[m] = int(std::max(double(box.lo[m]), ceilFast(a - 1e-6)));
-    hi[m] = int(std::min(double(box.hi[m]), floorFast(b + 1e-6)));
-    any = any && lo[m] <= hi[m];
+    const double a = double(std::min(std::min(v0[m], v1[m]), std::min(v2[m], v3[m]))) - 1e-6;
+    const double b = double(std::max(std::max(v0[m], v1[m]), std::max(v2[m], v3[m]))) + 1e-6;
+    lo[m] = std::max(box.lo[m], ceilInt(a));
+    hi[m] = std::min(box.hi[m], floorInt(b));
+    any &= lo[m] <= hi[m];
   }
   return any;
 }
@@ -583,10 +616,16 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
   const int nRanges = std::min(nz, 16);
   std::vector<std::uint8_t> rangeOf(static_cast<std::size_t>(nz));
   for (int k = 0; k < nz; ++k) rangeOf[std::size_t(k)] = std::uint8_t(std::size_t(k) * nRanges / nz);
+  // First work-box index of each z-range (every range holds at least one slice).
+  std::vector<std::size_t> rangeBase(std::size_t(nRanges) + 1, nW);
+  for (int k = nz; k-- > 0;) rangeBase[rangeOf[std::size_t(k)]] = std::size_t(k) * sliceSize;
+  for (int g = 0; g < nRanges; ++g)
+    if (rangeBase[std::size_t(g) + 1] - rangeBase[std::size_t(g)] > 0xffffffffu)
+      throw std::length_error("pull resample: output grid too large (a sixteenth of it exceeds 2^32 voxels)");
   const std::size_t nChunks = std::min<std::size_t>(512, std::max<std::size_t>(1, nT / 4096));
   std::vector<ChunkSamples<T>> chunks(nChunks);
   parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    Vertices p, r, q, qr;
+    Vertices p, r, q;
     TetSetup st, xs, sm;
     float delta[4];
     for (std::size_t c = cb; c < ce; ++c) {
@@ -594,8 +633,12 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
       C.cover.resize(std::size_t(nRanges));
       C.extend.resize(std::size_t(nRanges));
       for (std::size_t t = c * nT / nChunks, te = (c + 1) * nT / nChunks; t < te; ++t) {
+        // Tets finer than the voxels often hold no voxel centre at all.
+        int lb[3], ub[3];
+        const bool covers = latticeBox(P, tets, t, W, lb, ub);
+        const bool extends = boundary && boundary[t];
         loadVertices(P, tets, t, p);
-        // Edges, and the rows of their inverse times det (as in setupTet).
+        // Edges, and the rows of their inverse times det (for setupTet).
         double e[3][3], n[3][3];
         for (int q1 = 0; q1 < 3; ++q1)
           for (int m = 0; m < 3; ++m) e[q1][m] = p[q1 + 1][m] - p[0][m];
@@ -616,10 +659,6 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           ++C.inverted;
           continue;
         }
-        // Tets finer than the voxels often hold no voxel centre at all.
-        int lb[3], ub[3];
-        const bool covers = latticeBox(p, W, lb, ub);
-        const bool extends = boundary && boundary[t];
         if (!covers && !extends) continue;
         const int candidates = covers ? (ub[0] - lb[0] + 1) * (ub[1] - lb[1] + 1) * (ub[2] - lb[2] + 1) : 0;
         if (candidates > 0 && candidates <= 8) {
@@ -649,20 +688,24 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
                 }
                 double rk[3];
                 for (int m = 0; m < 3; ++m) rk[m] = sm.A[m][2] * k + sm.b[m];
-                auto& out1 = C.cover[rangeOf[std::size_t(k - W.lo[2])]];
-                const std::size_t base = W.index(i, j, k);
-                kernel.cover(sm, i, i, j, rk, [&](int off, T value) { out1.push_back({base + std::size_t(off), value}); });
+                const std::size_t g = rangeOf[std::size_t(k - W.lo[2])];
+                const std::size_t base = W.index(i, j, k) - rangeBase[g];
+                kernel.cover(sm, i, i, j, rk, [&](int off, T value) {
+                  C.cover[g].push_back({std::uint32_t(base + std::size_t(off)), value});
+                });
               }
           if (!extends) continue;
         }
         loadVertices(R, tets, t, r);
-        if (!setupTet(p, r, st)) continue;
+        setupTet(p, r, n, det, st);
         if (candidates > 8) {
           st.restInside = restInside(r, restDims);
           scanTet(st, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
             auto& out1 = C.cover[rangeOf[std::size_t(k - W.lo[2])]];
-            const std::size_t base = W.index(i0, j, k);
-            kernel.cover(st, i0, i1, j, rk, [&](int off, T value) { out1.push_back({base + std::size_t(off), value}); });
+            const std::size_t base = W.index(i0, j, k) - rangeBase[rangeOf[std::size_t(k - W.lo[2])]];
+            kernel.cover(st, i0, i1, j, rk, [&](int off, T value) {
+              out1.push_back({std::uint32_t(base + std::size_t(off)), value});
+            });
           });
         }
         if (!extends) continue;
@@ -672,9 +715,8 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           delta[a] = (boundary[t] >> a) & 1 ? float(distance * g.cwiseProduct(invSpacing).norm()) : 0.0f;
         }
         inflate(p, delta, q);
-        inflate(r, delta, qr);
-        if (!setupTet(q, qr, xs)) continue;
-        xs.restInside = false;
+        setupMap(st);
+        inflatedSetup(st, q, delta, xs);
         FaceDistance fd;
         for (int a = 0; a < 4; ++a) fd.h[a] = delta[a] > 0 ? distance / delta[a] : 0.0;  // h_a = d / δ_a
         scanTet(xs, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
@@ -683,8 +725,10 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
             fd.beta[a] = st.g[a][0];
           }
           auto& out2 = C.extend[rangeOf[std::size_t(k - W.lo[2])]];
-          const std::size_t base = W.index(i0, j, k);
-          kernel.extend(xs, i0, i1, j, rk, fd, [&](int off, T value) { out2.push_back({base + std::size_t(off), value}); });
+          const std::size_t base = W.index(i0, j, k) - rangeBase[rangeOf[std::size_t(k - W.lo[2])]];
+          kernel.extend(xs, i0, i1, j, rk, fd, [&](int off, T value) {
+            out2.push_back({std::uint32_t(base + std::size_t(off)), value});
+          });
         });
       }
     }
@@ -694,20 +738,22 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
   std::vector<std::vector<std::size_t>> extrapolated(static_cast<std::size_t>(nRanges));
   parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
     for (std::size_t g = rb; g < re; ++g) {
+      T* rangeOut = out + rangeBase[g];
+      std::uint8_t* rangeMarks = marks.get() + rangeBase[g];
       for (std::size_t c = nChunks; c-- > 0;) {
         const auto& S = chunks[c].cover[g];
         for (std::size_t q1 = S.size(); q1-- > 0;) {
-          out[S[q1].v] = S[q1].value;
-          marks[S[q1].v] = kCovered;
+          rangeOut[S[q1].v] = S[q1].value;
+          rangeMarks[S[q1].v] = kCovered;
         }
       }
       auto& X = extrapolated[g];
       for (std::size_t c = 0; c < nChunks; ++c)
         for (const auto& s : chunks[c].extend[g])
-          if (marks[s.v] == kEmpty) {
-            out[s.v] = s.value;
-            marks[s.v] = kExtrapolated;
-            X.push_back(s.v);
+          if (rangeMarks[s.v] == kEmpty) {
+            rangeOut[s.v] = s.value;
+            rangeMarks[s.v] = kExtrapolated;
+            X.push_back(rangeBase[g] + s.v);
           }
     }
   }, 1);
