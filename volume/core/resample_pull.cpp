@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <utility>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -819,8 +820,8 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
       }
     }, 1);
 
-    // 3b. Voxels outside the posed mesh that the extension left empty although at least 5 of their 6
-    // neighbours were written: wedge gaps where the inflated boundary tets of a convex ridge do not
+    // 3b. Voxels outside the posed mesh that the extension left empty (or background) although at
+    // least 5 of their 6 neighbours were written with tissue: wedge gaps where the inflated boundary tets of a convex ridge do not
     // quite meet. They are filled from those neighbours (the most common label, or the mean
     // intensity), so the posed skin has no pinholes. Voxels inside the posed mesh are never touched.
     // Such a voxel has at least 3 written neighbours in the 4 adjacent rows, so only rows next to
@@ -830,44 +831,62 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
       const std::size_t row = std::size_t(k) * ny + std::size_t(j);
       return first[row] <= last[row];
     };
-    parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
-      std::size_t local = 0;
-      T values[6];
-      for (int k = int(kb); k < int(ke); ++k)
-        for (int j = 0; j < ny; ++j) {
-          const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
-          int count = 0, ib = nx, ie = -1;
-          for (const auto& jk : nbr)
-            if (hasSpan(jk[0], jk[1])) {
-              ++count;
-              const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
-              ib = std::min(ib, first[row]);
-              ie = std::max(ie, last[row]);
-            }
-          if (count < 3) continue;
-          for (int i = ib; i <= ie; ++i) {
-            const std::size_t v = std::size_t(k) * sliceSize + std::size_t(j) * nx + std::size_t(i);
-            if (marks[v] != kEmpty) continue;
-            int n = 0;
-            auto take = [&](bool ok, std::size_t w) {
-              if (ok && marks[w] != kEmpty) values[n++] = out[w];
-            };
-            take(i > 0, v - 1);
-            take(i + 1 < nx, v + 1);
-            take(j > 0, v - std::size_t(nx));
-            take(j + 1 < ny, v + std::size_t(nx));
-            take(k > 0, v - sliceSize);
-            take(k + 1 < nz, v + sliceSize);
-            if (n >= 5) {
-              out[v] = combine(values, n);
-              const int gi = i + W.lo[0], gj = j + W.lo[1], gk = k + W.lo[2];
-              local += gi >= voi.lo[0] && gi <= voi.hi[0] && gj >= voi.lo[1] && gj <= voi.hi[1] &&
-                       gk >= voi.lo[2] && gk <= voi.hi[2];
+    // Repeated while it fills anything: a voxel filled in one pass counts as written in the next
+    // (within a pass marks do not change, so the result does not depend on the thread count).
+    constexpr std::uint8_t kFilled = 4;
+    std::vector<std::vector<std::pair<std::size_t, T>>> filled(static_cast<std::size_t>(nz));
+    for (int pass = 0; pass < 4; ++pass) {
+      parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
+        std::size_t local = 0;
+        T values[6];
+        for (int k = int(kb); k < int(ke); ++k)
+          for (int j = 0; j < ny; ++j) {
+            const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
+            int count = 0, ib = nx, ie = -1;
+            for (const auto& jk : nbr)
+              if (hasSpan(jk[0], jk[1])) {
+                ++count;
+                const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
+                ib = std::min(ib, first[row]);
+                ie = std::max(ie, last[row]);
+              }
+            if (count < 3) continue;
+            for (int i = ib; i <= ie; ++i) {
+              const std::size_t v = std::size_t(k) * sliceSize + std::size_t(j) * nx + std::size_t(i);
+              // Also an extrapolated voxel that read background: its inflated tet reached past the
+              // rest body (in a crease, where two skin surfaces of the posed body meet).
+              if (marks[v] != kEmpty && !(marks[v] == kExtrapolated && out[v] == background)) continue;
+              int n = 0;
+              auto take = [&](bool ok, std::size_t w) {
+                if (ok && marks[w] != kEmpty && !(out[w] == background)) values[n++] = out[w];
+              };
+              take(i > 0, v - 1);
+              take(i + 1 < nx, v + 1);
+              take(j > 0, v - std::size_t(nx));
+              take(j + 1 < ny, v + std::size_t(nx));
+              take(k > 0, v - sliceSize);
+              take(k + 1 < nz, v + sliceSize);
+              if (n >= 5) {
+                filled[std::size_t(k)].emplace_back(v, combine(values, n));  // written after the pass
+                const int gi = i + W.lo[0], gj = j + W.lo[1], gk = k + W.lo[2];
+                local += gi >= voi.lo[0] && gi <= voi.hi[0] && gj >= voi.lo[1] && gj <= voi.hi[1] &&
+                         gk >= voi.lo[2] && gk <= voi.hi[2];
+              }
             }
           }
+        filledInVoi += local;
+      }, 1);
+      std::size_t count = 0;
+      for (auto& f : filled) {
+        for (const auto& [v, value] : f) {
+          out[v] = value;
+          marks[v] = kFilled;
         }
-      filledInVoi += local;
-    }, 1);
+        count += f.size();
+        f.clear();
+      }
+      if (count == 0) break;
+    }
   }
 
   // Counts over the requested voxels; then those voxels into dst when the work box is larger.
