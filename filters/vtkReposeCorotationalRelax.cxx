@@ -93,7 +93,8 @@ int vtkReposeCorotationalRelax::RequestData(
     options.outerIterations = this->OuterIterations;
     options.tolerance = this->Tolerance;
     options.maxCgIterations = this->MaxIterations;
-    options.preconditioner = this->Preconditioner == 2 ? repose::CorotationalOptions::Cholmod
+    options.preconditioner = this->Preconditioner == 3 ? repose::CorotationalOptions::BlockJacobi
+      : this->Preconditioner == 2                      ? repose::CorotationalOptions::Cholmod
       : this->Preconditioner == 1                      ? repose::CorotationalOptions::IncompleteCholesky
                                                        : repose::CorotationalOptions::Jacobi;
     options.model = this->Model == 1 ? repose::CorotationalOptions::FixedCorotated
@@ -145,7 +146,11 @@ void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Tolerance: " << this->Tolerance << "\n";
   os << indent << "MaxIterations: " << this->MaxIterations << "\n";
   os << indent << "Preconditioner: "
-     << (this->Preconditioner == 2 ? "CHOLMOD" : this->Preconditioner == 1 ? "IncompleteCholesky" : "Jacobi") << "\n";
+     << (this->Preconditioner == 3   ? "BlockJacobi"
+         : this->Preconditioner == 2 ? "CHOLMOD"
+         : this->Preconditioner == 1 ? "IncompleteCholesky"
+                                     : "Jacobi")
+     << "\n";
   os << indent << "Model: " << (this->Model == 1 ? "FixedCorotated" : "Linear") << "\n";
   os << indent << "MaxNewtonIterations: " << this->MaxNewtonIterations << "\n";
   os << indent << "StepTolerance: " << this->StepTolerance << "\n";

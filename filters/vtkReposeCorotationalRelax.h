@@ -27,8 +27,9 @@ public:
   vtkGetMacro(Tolerance, double);
   vtkSetClampMacro(MaxIterations, int, 1, 1000000);
   vtkGetMacro(MaxIterations, int);
-  /// 0 = Jacobi-PCG (default), 1 = incomplete-Cholesky PCG, 2 = CHOLMOD direct solve.
-  vtkSetClampMacro(Preconditioner, int, 0, 2);
+  /// 0 = Jacobi-PCG (Eigen), 1 = incomplete-Cholesky PCG, 2 = CHOLMOD direct solve,
+  /// 3 = block-Jacobi PCG on float 3x3 blocks (default).
+  vtkSetClampMacro(Preconditioner, int, 0, 3);
   vtkGetMacro(Preconditioner, int);
   /// 0 = linear corotational, 1 = fixed-corotated (nonlinear, default).
   vtkSetClampMacro(Model, int, 0, 1);
@@ -72,7 +73,7 @@ protected:
   int OuterIterations = 1;
   double Tolerance = 1e-6;
   int MaxIterations = 2000;
-  int Preconditioner = 0;
+  int Preconditioner = 3;
   int Model = 1;
   int MaxNewtonIterations = 60;
   double StepTolerance = 0.01;

@@ -1,6 +1,7 @@
 // Static corotational FEM relaxation: known solutions and invariants.
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <chrono>
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "block_sparse_cg.h"
 #include "corotational_fem.h"
 #include "signed_svd.h"
 #include "tet_untangling.h"
@@ -133,6 +135,8 @@ TEST(CorotationalFem, InvariantToRigidMotionOfTheWholeProblem) {
   opt.tolerance = 1e-13;
   opt.maxCgIterations = 10000;
   opt.outerIterations = 3;
+  // Double-precision CG: the default float block matrix rounds at about 1e-7 of the correction.
+  opt.preconditioner = CorotationalOptions::Jacobi;
   Points x = posed;
   repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt);
 
@@ -549,4 +553,49 @@ TEST(TetUntangling, TetsWithOnlyFixedNodesAreReportedNotMoved) {
   EXPECT_EQ(rep.invertedAfter, rep.invertedBefore);
   EXPECT_EQ(rep.invertedRigid, rep.invertedAfter);
   EXPECT_EQ((posed - before).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(BlockSparseCg, SolvesAnSpdBlockSystemLikeADenseSolver) {
+  // A random SPD matrix of 3x3 blocks with a sparse block pattern (a chain with skips).
+  const int n = 40;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (int i = 0; i < n; ++i)
+    for (int j : {i + 1, i + 3})
+      if (j < n) {
+        Eigen::Matrix3d B;
+        for (int k = 0; k < 9; ++k) B(k / 3, k % 3) = 0.3 * g(rng);
+        dense.block<3, 3>(3 * i, 3 * j) = B;
+        dense.block<3, 3>(3 * j, 3 * i) = B.transpose();
+      }
+  for (int i = 0; i < 3 * n; ++i) dense(i, i) = 4.0 + std::abs(g(rng));  // diagonally dominant: SPD
+  repose::BlockSparseMatrix3f A;
+  A.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j)
+      if (dense.block<3, 3>(3 * i, 3 * j).cwiseAbs().maxCoeff() > 0) {
+        A.column.push_back(j);
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) A.values.push_back(float(dense(3 * i + r, 3 * j + c)));
+      }
+    A.rowStart.push_back(int(A.column.size()));
+  }
+  Eigen::MatrixXd asFloat = dense.cast<float>().cast<double>();  // the operator CG actually sees
+  Eigen::VectorXd b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) b(i) = g(rng);
+  Eigen::VectorXd y;
+  A.multiply(b, y);
+  EXPECT_LT((y - asFloat * b).norm(), 1e-12 * b.norm());
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n);
+  const repose::BlockCgResult r = repose::blockJacobiCg(A, b, x, 1e-10, 1000);
+  EXPECT_LE(r.relativeResidual, 1e-10);
+  EXPECT_GT(r.iterations, 0);
+  const Eigen::VectorXd exact = asFloat.ldlt().solve(b);
+  EXPECT_LT((x - exact).norm(), 1e-8 * exact.norm());
+  // A warm start at the solution needs no iteration.
+  Eigen::VectorXd warm = exact;
+  EXPECT_EQ(repose::blockJacobiCg(A, b, warm, 1e-6, 1000).iterations, 0);
+  Eigen::VectorXd wrong(5);
+  EXPECT_THROW(repose::blockJacobiCg(A, b, wrong, 1e-6, 10), std::invalid_argument);
 }

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "block_sparse_cg.h"
 #include "parallel_for.h"
 #include "signed_svd.h"
 #include "tet_untangling.h"
@@ -90,7 +91,22 @@ class SpdSolver {
 
   void solve(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int& iterations,
              double& residual) {
-    if (options_.preconditioner == CorotationalOptions::Cholmod) {
+    if (options_.preconditioner == CorotationalOptions::BlockJacobi) {
+      // The float matrix solves for the correction to x only (the residual is formed in double), so
+      // its rounding stays relative to the correction, not to the node coordinates.
+      toBlocks(A);
+      const Eigen::VectorXd r0 = b - A * x;
+      const double bn = b.norm(), rn = r0.norm();
+      iterations = 0;
+      residual = bn > 0 ? rn / bn : 0.0;
+      if (rn > tolerance * bn) {
+        Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+        const BlockCgResult r = blockJacobiCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations);
+        x += dx;
+        iterations = r.iterations;
+        residual = r.relativeResidual * rn / bn;
+      }
+    } else if (options_.preconditioner == CorotationalOptions::Cholmod) {
       if (!analyzed_) {
         // METIS nested dissection (as for the harmonic weights); CHOLMOD's defaults without METIS.
         cholmod_.cholmod().nmethods = 1;
@@ -138,7 +154,38 @@ class SpdSolver {
   }
 
  private:
+  /// A's values as float 3x3 blocks. A holds one block row per free node: scalar column 3i + c
+  /// (= row, A being symmetric) lists the row's blocks in order, 3 scalars each. The block pattern is
+  /// built on the first call (A's pattern is fixed).
+  void toBlocks(const SpMat& A) {
+    const int n = int(A.rows() / 3);
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* values = A.valuePtr();
+    if (blocks_.rows() != n) {
+      blocks_.rowStart.assign(std::size_t(n) + 1, 0);
+      for (int i = 0; i < n; ++i) blocks_.rowStart[std::size_t(i) + 1] = blocks_.rowStart[std::size_t(i)] + (outer[3 * i + 1] - outer[3 * i]) / 3;
+      blocks_.column.resize(std::size_t(blocks_.rowStart.back()));
+      blocks_.values.resize(9 * std::size_t(blocks_.rowStart.back()));
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < blocks_.rowStart[std::size_t(i) + 1] - blocks_.rowStart[std::size_t(i)]; ++k)
+          blocks_.column[std::size_t(blocks_.rowStart[std::size_t(i)] + k)] = inner[outer[3 * i] + 3 * k] / 3;
+    }
+    parallelFor(std::size_t(n), [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        const int rowLen = blocks_.rowStart[i + 1] - blocks_.rowStart[i];
+        const double* v0 = values + outer[3 * i];
+        for (int k = 0; k < rowLen; ++k) {
+          float* dst = blocks_.values.data() + 9 * std::size_t(blocks_.rowStart[i] + k);
+          for (int c = 0; c < 3; ++c)
+            for (int d = 0; d < 3; ++d) dst[3 * c + d] = float(v0[3 * c * rowLen + 3 * k + d]);
+        }
+      }
+    }, 1024);
+  }
+
   const CorotationalOptions& options_;
+  BlockSparseMatrix3f blocks_;
   Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> cholmod_;
   bool analyzed_ = false;
 };

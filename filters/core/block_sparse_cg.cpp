@@ -1,0 +1,99 @@
+#include "block_sparse_cg.h"
+
+#include <Eigen/LU>
+#include <cmath>
+#include <stdexcept>
+
+namespace repose {
+
+void BlockSparseMatrix3f::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  const int n = rows();
+  y.resize(3 * Eigen::Index(n));
+  const double* xp = x.data();
+  double* yp = y.data();
+#pragma omp parallel for schedule(static, 512)
+  for (int i = 0; i < n; ++i) {
+    double s0 = 0, s1 = 0, s2 = 0;
+    for (int k = rowStart[std::size_t(i)]; k < rowStart[std::size_t(i) + 1]; ++k) {
+      const float* v = values.data() + 9 * std::size_t(k);
+      const double* xc = xp + 3 * std::size_t(column[std::size_t(k)]);
+      const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
+      s0 += double(v[0]) * x0 + double(v[1]) * x1 + double(v[2]) * x2;
+      s1 += double(v[3]) * x0 + double(v[4]) * x1 + double(v[5]) * x2;
+      s2 += double(v[6]) * x0 + double(v[7]) * x1 + double(v[8]) * x2;
+    }
+    yp[3 * std::size_t(i)] = s0;
+    yp[3 * std::size_t(i) + 1] = s1;
+    yp[3 * std::size_t(i) + 2] = s2;
+  }
+}
+
+BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                            double tolerance, int maxIterations) {
+  const int n = A.rows();
+  if (b.size() != 3 * Eigen::Index(n) || x.size() != b.size())
+    throw std::invalid_argument("blockJacobiCg: vector sizes do not match the matrix");
+  BlockCgResult result;
+  const double bNorm = b.norm();
+  if (!(bNorm > 0.0)) {
+    x.setZero();
+    return result;
+  }
+  // Inverses of the diagonal blocks.
+  std::vector<Eigen::Matrix3d> inverse(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static, 1024)
+  for (int i = 0; i < n; ++i) {
+    Eigen::Matrix3d D = Eigen::Matrix3d::Zero();
+    for (int k = A.rowStart[std::size_t(i)]; k < A.rowStart[std::size_t(i) + 1]; ++k)
+      if (A.column[std::size_t(k)] == i) {
+        const float* v = A.values.data() + 9 * std::size_t(k);
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) D(r, c) = double(v[3 * r + c]);
+      }
+    const double scale = D.cwiseAbs().maxCoeff();
+    if (scale > 0 && std::abs(D.determinant()) > 1e-12 * scale * scale * scale) {
+      inverse[std::size_t(i)] = D.inverse();
+    } else {
+      inverse[std::size_t(i)].setZero();
+      for (int r = 0; r < 3; ++r) inverse[std::size_t(i)](r, r) = D(r, r) > 0 ? 1.0 / D(r, r) : 0.0;
+    }
+  }
+  auto precondition = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+#pragma omp parallel for schedule(static, 1024)
+    for (int i = 0; i < n; ++i) z.segment<3>(3 * Eigen::Index(i)) = inverse[std::size_t(i)] * r.segment<3>(3 * Eigen::Index(i));
+  };
+
+  Eigen::VectorXd r(b.size()), z(b.size()), p(b.size()), q(b.size());
+  A.multiply(x, q);
+  r = b - q;
+  double rNorm = r.norm();
+  const double threshold = tolerance * bNorm;
+  if (rNorm <= threshold) {
+    result.relativeResidual = rNorm / bNorm;
+    return result;
+  }
+  precondition(r, z);
+  p = z;
+  double rz = r.dot(z);
+  int it = 0;
+  while (it < maxIterations) {
+    A.multiply(p, q);
+    const double pq = p.dot(q);
+    if (!(pq > 0.0)) break;  // no descent left (semi-definite direction)
+    const double alpha = rz / pq;
+    x += alpha * p;
+    r -= alpha * q;
+    ++it;
+    rNorm = r.norm();
+    if (rNorm <= threshold) break;
+    precondition(r, z);
+    const double rzNew = r.dot(z);
+    p = z + (rzNew / rz) * p;
+    rz = rzNew;
+  }
+  result.iterations = it;
+  result.relativeResidual = rNorm / bNorm;
+  return result;
+}
+
+}  // namespace repose

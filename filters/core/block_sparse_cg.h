@@ -1,0 +1,31 @@
+#pragma once
+// Conjugate gradients on a symmetric positive (semi-)definite matrix of 3x3 blocks, one block row
+// per free node: the linear systems of the FEM relaxation. The matrix is stored in float with one
+// column index per block, a third of the memory traffic of a scalar double CSR matrix, which bounds
+// the matrix-vector product that dominates CG; vectors and sums stay in double.
+#include <Eigen/Core>
+#include <vector>
+
+namespace repose {
+
+struct BlockSparseMatrix3f {
+  std::vector<int> rowStart;   ///< #rows + 1: blocks of block row i are [rowStart[i], rowStart[i + 1])
+  std::vector<int> column;     ///< block column of each block, ascending within a row
+  std::vector<float> values;   ///< 9 per block, row-major
+  int rows() const { return rowStart.empty() ? 0 : int(rowStart.size()) - 1; }
+  /// y = A x (x, y: 3 * rows()), threaded over block rows.
+  void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+};
+
+struct BlockCgResult {
+  int iterations = 0;
+  double relativeResidual = 0.0;  ///< |b - A x| / |b| at exit (the recurrence's residual)
+};
+
+/// Preconditioned CG with the inverses of the 3x3 diagonal blocks (block Jacobi), warm-started from
+/// x; stops when |r| <= tolerance |b| or after maxIterations. A singular diagonal block falls back
+/// to the inverse of its diagonal.
+BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                            double tolerance, int maxIterations);
+
+}  // namespace repose
