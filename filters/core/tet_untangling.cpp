@@ -114,14 +114,18 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
   const double ratio = options.minVolumeRatio;
   std::vector<Vec3> normal;
   std::vector<double> offset;
+  // Tets below the target ratio (inverted ones and those left nearly flat). A tet can only fall
+  // below it when one of its nodes moves, so after the first sweep only the stars of the nodes
+  // worked on (and the low tets already known) are looked at again.
+  std::vector<int> low;
+  for (int t = 0; t < nT; ++t)
+    if (signedVolume(posed, tets, t) <= ratio * restVolume[std::size_t(t)]) low.push_back(t);
   for (rep.sweeps = 0; rep.sweeps < options.maxSweeps; ++rep.sweeps) {
-    // Free nodes of the tets below the target ratio (inverted ones and those left nearly flat).
+    // Free nodes of the low tets.
     std::vector<int> nodes;
-    for (int t = 0; t < nT; ++t) {
-      if (signedVolume(posed, tets, t) > ratio * restVolume[std::size_t(t)]) continue;
+    for (int t : low)
       for (int a = 0; a < 4; ++a)
         if (fixedBone[std::size_t(tets(t, a))] < 0) nodes.push_back(tets(t, a));
-    }
     std::sort(nodes.begin(), nodes.end());
     nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
     bool improved = false;
@@ -174,9 +178,18 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
         improved = true;
       }
     }
+    std::vector<int> candidates = low;
+    for (int v : nodes)
+      for (int k = start[std::size_t(v)]; k < start[std::size_t(v) + 1]; ++k) candidates.push_back(inc[std::size_t(k)] / 4);
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    low.clear();
     int inverted = 0;
-    for (int t = 0; t < nT; ++t)
-      if (signedVolume(posed, tets, t) <= 0.0) ++inverted;
+    for (int t : candidates) {
+      const double vol = signedVolume(posed, tets, t);
+      if (vol <= ratio * restVolume[std::size_t(t)]) low.push_back(t);
+      if (vol <= 0.0) ++inverted;
+    }
     if (inverted == 0 || !improved) {
       ++rep.sweeps;
       break;
