@@ -24,6 +24,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 vtkStandardNewMacro(vtkReposePosedVolume);
 
@@ -52,6 +53,13 @@ struct vtkReposePosedVolume::Internals
   vtkDataArray* Scalars = nullptr;
   vtkMTimeType ScalarsTime = 0;
   int ScalarsKind = -1;
+  // Rest label boxes for the rigid-bone overlay (follow Labels; unset until first needed).
+  std::unique_ptr<std::vector<Eigen::AlignedBox3i>> LabelBoxes;
+  std::array<int, 3> LabelBoxesDims = { { -1, -1, -1 } };
+  // Fixed bone per rest node, and the array it was converted from.
+  std::vector<int> FixedBone;
+  vtkDataArray* FixedArray = nullptr;
+  vtkMTimeType FixedTime = 0;
 };
 
 namespace
@@ -344,6 +352,7 @@ int vtkReposePosedVolume::RequestData(
     if (in.Scalars != scalars || in.ScalarsTime != scalars->GetMTime() || in.ScalarsKind != kind)
     {
       in.Scalars = nullptr;
+      in.LabelBoxes.reset();
       in.Labels.data.clear();
       in.Values.data.clear();
       if (kind == 0)
@@ -397,14 +406,28 @@ int vtkReposePosedVolume::RequestData(
       vtkDataArray* fixed = restMesh->GetPointData()->GetArray("FixedBone");
       if (this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints())
       {
-        std::vector<int> fixedBone(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
-        for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
+        // Pose-independent inputs of the overlay are converted once.
+        if (in.FixedArray != fixed || in.FixedTime != fixed->GetMTime() ||
+          in.FixedBone.size() != static_cast<std::size_t>(fixed->GetNumberOfTuples()))
         {
-          fixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
+          in.FixedArray = nullptr;
+          in.FixedBone.resize(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
+          for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
+          {
+            in.FixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
+          }
+          in.FixedArray = fixed;
+          in.FixedTime = fixed->GetMTime();
         }
-        const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, fixedBone);
-        this->RigidBoneVoxels =
-          static_cast<vtkIdType>(repose::overlayRigidBones(array->GetPointer(0), voiGrid, labels, bones));
+        const std::array<int, 3> dims = { { rest.dims[0], rest.dims[1], rest.dims[2] } };
+        if (!in.LabelBoxes || in.LabelBoxesDims != dims)
+        {
+          in.LabelBoxes.reset(new std::vector<Eigen::AlignedBox3i>(repose::restLabelBoxes(labels)));
+          in.LabelBoxesDims = dims;
+        }
+        const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, in.FixedBone);
+        this->RigidBoneVoxels = static_cast<vtkIdType>(
+          repose::overlayRigidBones(array->GetPointer(0), voiGrid, labels, bones, in.LabelBoxes.get()));
       }
       outScalars = array;
     }
