@@ -56,6 +56,8 @@ struct vtkReposePosedVolume::Internals
   // Rest label boxes for the rigid-bone overlay (follow Labels; unset until first needed).
   std::unique_ptr<std::vector<Eigen::AlignedBox3i>> LabelBoxes;
   std::array<int, 3> LabelBoxesDims = { { -1, -1, -1 } };
+  // The last label output array, for reuse by the next pose.
+  vtkSmartPointer<vtkIntArray> LastLabels;
   // Fixed bone per rest node, and the array it was converted from.
   std::vector<int> FixedBone;
   vtkDataArray* FixedArray = nullptr;
@@ -397,9 +399,22 @@ int vtkReposePosedVolume::RequestData(
     if (this->Interpolation == Nearest)
     {
       const repose::LabelVolume& labels = in.Labels;
-      // Written in place: the core fills every voxel.
-      auto array = vtkSmartPointer<vtkIntArray>::New();
+      // Written in place: the core fills every voxel. The previous pose's array is reused when nothing
+      // but this filter and its own output (about to be replaced) holds it: a fresh one costs page
+      // faults over the whole volume on every pose.
+      vtkSmartPointer<vtkIntArray> array = in.LastLabels;
+      in.LastLabels = nullptr;
+      const int holders = array ? 1 + (output->GetPointData()->GetScalars() == array.GetPointer() ? 1 : 0) : 0;
+      // Poses change the output grid a little: allocated with some room, reused while it holds the
+      // grid and is not much larger.
+      if (!array || array->GetReferenceCount() != holders || array->GetSize() < voxels ||
+        array->GetSize() > voxels + voxels / 4)
+      {
+        array = vtkSmartPointer<vtkIntArray>::New();
+        array->Allocate(voxels + voxels / 8);
+      }
       array->SetNumberOfTuples(voxels);
+      in.LastLabels = array;
       repose::resampleLabelsPullInto(labels, restNodes, posedNodes, tets, outGrid, options, array->GetPointer(0),
         static_cast<std::int32_t>(this->BackgroundValue), &report);
       this->RigidBoneVoxels = 0;
@@ -440,6 +455,7 @@ int vtkReposePosedVolume::RequestData(
       outScalars = array;
     }
     outScalars->SetName(scalars->GetName() ? scalars->GetName() : "ImageScalars");
+    outScalars->Modified();
     // The full grid's origin: the sub-extent's voxels keep their indices.
     output->Initialize();
     output->SetExtent(voi.data());
