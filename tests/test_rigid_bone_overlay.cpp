@@ -94,3 +94,32 @@ TEST(RigidBoneOverlay, BlockOfTheGridEqualsThatPartOfTheWholeOverlay) {
       for (int i = e[0]; i <= e[1]; ++i) mismatches += block.at(i - e[0], j - e[2], k - e[4]) != whole.at(i, j, k);
   EXPECT_EQ(mismatches, 0);
 }
+
+TEST(RigidBoneOverlay, PrecomputedLabelBoxesGiveTheSameOverlay) {
+  LabelVolume rest = boxVolume();
+  for (int k = 2; k < 5; ++k)
+    for (int j = 3; j < 9; ++j)
+      for (int i = 20; i < 26; ++i) rest.at(i, j, k) = 9;  // a second bone label, away from the first
+  const auto boxes = restLabelBoxes(rest);
+  ASSERT_EQ(boxes.size(), 10u);
+  EXPECT_TRUE(boxes[3].isEmpty());
+  EXPECT_EQ(boxes[7].min(), Eigen::Vector3i(10, 12, 8));
+  EXPECT_EQ(boxes[7].max(), Eigen::Vector3i(19, 17, 21));
+  EXPECT_EQ(boxes[9].min(), Eigen::Vector3i(20, 3, 2));
+  EXPECT_EQ(boxes[9].max(), Eigen::Vector3i(25, 8, 4));
+  RigidBone bone;
+  bone.transform.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.3, 1, 0.2).normalized()).toRotationMatrix();
+  bone.transform.translation() = Eigen::Vector3d(-1.2, 0.8, 2.1);
+  bone.labels = {7, 9};
+  LabelVolume scanned = rest;
+  for (auto& v : scanned.data) v = v == 7 || v == 9 ? 1 : v;
+  LabelVolume cached = scanned;
+  const std::size_t n = overlayRigidBones(scanned, rest, {bone});
+  EXPECT_GT(n, 500u);
+  EXPECT_EQ(overlayRigidBones(cached.data.data(), cached.grid, rest, {bone}, &boxes), n);
+  EXPECT_EQ(cached.data, scanned.data);
+  // Label values too large to index are not boxed; the overlay then scans.
+  LabelVolume huge = rest;
+  huge.data[0] = kMaxBoxedLabel + 1;
+  EXPECT_TRUE(restLabelBoxes(huge).empty());
+}

@@ -24,6 +24,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 vtkStandardNewMacro(vtkReposePosedVolume);
 
@@ -52,6 +53,15 @@ struct vtkReposePosedVolume::Internals
   vtkDataArray* Scalars = nullptr;
   vtkMTimeType ScalarsTime = 0;
   int ScalarsKind = -1;
+  // Rest label boxes for the rigid-bone overlay (follow Labels; unset until first needed).
+  std::unique_ptr<std::vector<Eigen::AlignedBox3i>> LabelBoxes;
+  std::array<int, 3> LabelBoxesDims = { { -1, -1, -1 } };
+  // The last label output array, for reuse by the next pose.
+  vtkSmartPointer<vtkIntArray> LastLabels;
+  // Fixed bone per rest node, and the array it was converted from.
+  std::vector<int> FixedBone;
+  vtkDataArray* FixedArray = nullptr;
+  vtkMTimeType FixedTime = 0;
 };
 
 namespace
@@ -344,6 +354,7 @@ int vtkReposePosedVolume::RequestData(
     if (in.Scalars != scalars || in.ScalarsTime != scalars->GetMTime() || in.ScalarsKind != kind)
     {
       in.Scalars = nullptr;
+      in.LabelBoxes.reset();
       in.Labels.data.clear();
       in.Values.data.clear();
       if (kind == 0)
@@ -388,23 +399,50 @@ int vtkReposePosedVolume::RequestData(
     if (this->Interpolation == Nearest)
     {
       const repose::LabelVolume& labels = in.Labels;
-      // Written in place: the core fills every voxel.
-      auto array = vtkSmartPointer<vtkIntArray>::New();
+      // Written in place: the core fills every voxel. The previous pose's array is reused when nothing
+      // but this filter and its own output (about to be replaced) holds it: a fresh one costs page
+      // faults over the whole volume on every pose.
+      vtkSmartPointer<vtkIntArray> array = in.LastLabels;
+      in.LastLabels = nullptr;
+      const int holders = array ? 1 + (output->GetPointData()->GetScalars() == array.GetPointer() ? 1 : 0) : 0;
+      // Poses change the output grid a little: allocated with some room, reused while it holds the
+      // grid and is not much larger.
+      if (!array || array->GetReferenceCount() != holders || array->GetSize() < voxels ||
+        array->GetSize() > voxels + voxels / 4)
+      {
+        array = vtkSmartPointer<vtkIntArray>::New();
+        array->Allocate(voxels + voxels / 8);
+      }
       array->SetNumberOfTuples(voxels);
+      in.LastLabels = array;
       repose::resampleLabelsPullInto(labels, restNodes, posedNodes, tets, outGrid, options, array->GetPointer(0),
         static_cast<std::int32_t>(this->BackgroundValue), &report);
       this->RigidBoneVoxels = 0;
       vtkDataArray* fixed = restMesh->GetPointData()->GetArray("FixedBone");
       if (this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints())
       {
-        std::vector<int> fixedBone(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
-        for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
+        // Pose-independent inputs of the overlay are converted once.
+        if (in.FixedArray != fixed || in.FixedTime != fixed->GetMTime() ||
+          in.FixedBone.size() != static_cast<std::size_t>(fixed->GetNumberOfTuples()))
         {
-          fixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
+          in.FixedArray = nullptr;
+          in.FixedBone.resize(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
+          for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
+          {
+            in.FixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
+          }
+          in.FixedArray = fixed;
+          in.FixedTime = fixed->GetMTime();
         }
-        const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, fixedBone);
-        this->RigidBoneVoxels =
-          static_cast<vtkIdType>(repose::overlayRigidBones(array->GetPointer(0), voiGrid, labels, bones));
+        const std::array<int, 3> dims = { { rest.dims[0], rest.dims[1], rest.dims[2] } };
+        if (!in.LabelBoxes || in.LabelBoxesDims != dims)
+        {
+          in.LabelBoxes.reset(new std::vector<Eigen::AlignedBox3i>(repose::restLabelBoxes(labels)));
+          in.LabelBoxesDims = dims;
+        }
+        const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, in.FixedBone);
+        this->RigidBoneVoxels = static_cast<vtkIdType>(
+          repose::overlayRigidBones(array->GetPointer(0), voiGrid, labels, bones, in.LabelBoxes.get()));
       }
       outScalars = array;
     }
@@ -417,6 +455,7 @@ int vtkReposePosedVolume::RequestData(
       outScalars = array;
     }
     outScalars->SetName(scalars->GetName() ? scalars->GetName() : "ImageScalars");
+    outScalars->Modified();
     // The full grid's origin: the sub-extent's voxels keep their indices.
     output->Initialize();
     output->SetExtent(voi.data());

@@ -834,58 +834,100 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
     // Repeated while it fills anything: a voxel filled in one pass counts as written in the next
     // (within a pass marks do not change, so the result does not depend on the thread count).
     constexpr std::uint8_t kFilled = 4;
+    // The row test above for voxel (i, j, k): at least 3 of the 4 adjacent rows hold written voxels and
+    // i lies within their spans.
+    auto inSpans = [&](int i, int j, int k) {
+      const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
+      int count = 0, ib = nx, ie = -1;
+      for (const auto& jk : nbr)
+        if (hasSpan(jk[0], jk[1])) {
+          ++count;
+          const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
+          ib = std::min(ib, first[row]);
+          ie = std::max(ie, last[row]);
+        }
+      return count >= 3 && i >= ib && i <= ie;
+    };
+    // Voxel v = (i, j, k) filled in this pass: appended to `to` (written after the pass).
+    auto tryFill = [&](int i, int j, int k, std::vector<std::pair<std::size_t, T>>& to, std::size_t& local) {
+      const std::size_t v = std::size_t(k) * sliceSize + std::size_t(j) * nx + std::size_t(i);
+      // Also an extrapolated voxel that read background: its inflated tet reached past the
+      // rest body (in a crease, where two skin surfaces of the posed body meet).
+      if (marks[v] != kEmpty && !(marks[v] == kExtrapolated && out[v] == background)) return;
+      T values[6];
+      int n = 0;
+      auto take = [&](bool ok, std::size_t w) {
+        if (ok && marks[w] != kEmpty && !(out[w] == background)) values[n++] = out[w];
+      };
+      take(i > 0, v - 1);
+      take(i + 1 < nx, v + 1);
+      take(j > 0, v - std::size_t(nx));
+      take(j + 1 < ny, v + std::size_t(nx));
+      take(k > 0, v - sliceSize);
+      take(k + 1 < nz, v + sliceSize);
+      if (n < 5) return;
+      to.emplace_back(v, combine(values, n));
+      const int gi = i + W.lo[0], gj = j + W.lo[1], gk = k + W.lo[2];
+      local += gi >= voi.lo[0] && gi <= voi.hi[0] && gj >= voi.lo[1] && gj <= voi.hi[1] && gk >= voi.lo[2] &&
+               gk <= voi.hi[2];
+    };
+    // The first pass visits all rows next to written rows; later passes only the neighbours of the
+    // voxels the previous pass filled (no other voxel's neighbourhood changed).
     std::vector<std::vector<std::pair<std::size_t, T>>> filled(static_cast<std::size_t>(nz));
-    for (int pass = 0; pass < 4; ++pass) {
-      parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
-        std::size_t local = 0;
-        T values[6];
-        for (int k = int(kb); k < int(ke); ++k)
-          for (int j = 0; j < ny; ++j) {
-            const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
-            int count = 0, ib = nx, ie = -1;
-            for (const auto& jk : nbr)
-              if (hasSpan(jk[0], jk[1])) {
-                ++count;
-                const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
-                ib = std::min(ib, first[row]);
-                ie = std::max(ie, last[row]);
-              }
-            if (count < 3) continue;
-            for (int i = ib; i <= ie; ++i) {
-              const std::size_t v = std::size_t(k) * sliceSize + std::size_t(j) * nx + std::size_t(i);
-              // Also an extrapolated voxel that read background: its inflated tet reached past the
-              // rest body (in a crease, where two skin surfaces of the posed body meet).
-              if (marks[v] != kEmpty && !(marks[v] == kExtrapolated && out[v] == background)) continue;
-              int n = 0;
-              auto take = [&](bool ok, std::size_t w) {
-                if (ok && marks[w] != kEmpty && !(out[w] == background)) values[n++] = out[w];
-              };
-              take(i > 0, v - 1);
-              take(i + 1 < nx, v + 1);
-              take(j > 0, v - std::size_t(nx));
-              take(j + 1 < ny, v + std::size_t(nx));
-              take(k > 0, v - sliceSize);
-              take(k + 1 < nz, v + sliceSize);
-              if (n >= 5) {
-                filled[std::size_t(k)].emplace_back(v, combine(values, n));  // written after the pass
-                const int gi = i + W.lo[0], gj = j + W.lo[1], gk = k + W.lo[2];
-                local += gi >= voi.lo[0] && gi <= voi.hi[0] && gj >= voi.lo[1] && gj <= voi.hi[1] &&
-                         gk >= voi.lo[2] && gk <= voi.hi[2];
-              }
+    parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
+      std::size_t local = 0;
+      for (int k = int(kb); k < int(ke); ++k)
+        for (int j = 0; j < ny; ++j) {
+          const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
+          int count = 0, ib = nx, ie = -1;
+          for (const auto& jk : nbr)
+            if (hasSpan(jk[0], jk[1])) {
+              ++count;
+              const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
+              ib = std::min(ib, first[row]);
+              ie = std::max(ie, last[row]);
             }
-          }
-        filledInVoi += local;
-      }, 1);
-      std::size_t count = 0;
+          if (count < 3) continue;
+          for (int i = ib; i <= ie; ++i) tryFill(i, j, k, filled[std::size_t(k)], local);
+        }
+      filledInVoi += local;
+    }, 1);
+    std::vector<std::size_t> prev;
+    for (int pass = 0; pass < 4; ++pass) {
+      prev.clear();
       for (auto& f : filled) {
         for (const auto& [v, value] : f) {
           out[v] = value;
           marks[v] = kFilled;
+          prev.push_back(v);
         }
-        count += f.size();
         f.clear();
       }
-      if (count == 0) break;
+      if (prev.empty() || pass == 3) break;
+      std::vector<std::size_t> next;
+      next.reserve(6 * prev.size());
+      for (const std::size_t v : prev) {
+        const std::size_t row = v / std::size_t(nx);
+        const int i = int(v - row * std::size_t(nx));
+        const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
+        if (i > 0) next.push_back(v - 1);
+        if (i + 1 < nx) next.push_back(v + 1);
+        if (j > 0) next.push_back(v - std::size_t(nx));
+        if (j + 1 < ny) next.push_back(v + std::size_t(nx));
+        if (k > 0) next.push_back(v - sliceSize);
+        if (k + 1 < nz) next.push_back(v + sliceSize);
+      }
+      std::sort(next.begin(), next.end());
+      next.erase(std::unique(next.begin(), next.end()), next.end());
+      // Candidates in slice order, so `filled` stays per slice.
+      std::size_t local = 0;
+      for (const std::size_t v : next) {
+        const std::size_t row = v / std::size_t(nx);
+        const int i = int(v - row * std::size_t(nx));
+        const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
+        if (inSpans(i, j, k)) tryFill(i, j, k, filled[std::size_t(k)], local);
+      }
+      filledInVoi += local;
     }
   }
 

@@ -78,8 +78,44 @@ std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const
   return overlayRigidBones(posed.data.data(), posed.grid, rest, bones);
 }
 
+std::vector<Eigen::AlignedBox3i> restLabelBoxes(const LabelVolume& rest) {
+  if (rest.data.size() != rest.grid.voxelCount())
+    throw std::invalid_argument("rigid bones: volume sizes do not match their grids");
+  std::int32_t maxLabel = 0;
+  for (const std::int32_t l : rest.data) maxLabel = std::max(maxLabel, l);
+  if (maxLabel > kMaxBoxedLabel) return {};
+  const auto& rd = rest.grid.dims;
+  // Fixed chunks of slices in parallel, then merged.
+  const std::size_t nLabels = std::size_t(maxLabel) + 1;
+  const std::size_t nChunks = std::max<std::size_t>(1, std::min<std::size_t>(64, std::size_t(rd[2])));
+  std::vector<std::vector<Eigen::AlignedBox3i>> chunkBox(nChunks);
+  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
+    for (std::size_t c = cb; c < ce; ++c) {
+      auto& box = chunkBox[c];
+      box.resize(nLabels);
+      for (int k = int(c * std::size_t(rd[2]) / nChunks); k < int((c + 1) * std::size_t(rd[2]) / nChunks); ++k)
+        for (int j = 0; j < rd[1]; ++j) {
+          const std::int32_t* row = rest.data.data() + rest.grid.linearIndex(0, j, k);
+          for (int i = 0; i < rd[0]; ++i)
+            if (row[i] > 0) box[std::size_t(row[i])].extend(Eigen::Vector3i(i, j, k));
+        }
+    }
+  }, 1);
+  std::vector<Eigen::AlignedBox3i> boxes(nLabels);
+  for (const auto& box : chunkBox)
+    for (std::size_t l = 0; l < nLabels; ++l)
+      if (!box[l].isEmpty()) boxes[l].extend(box[l]);
+  return boxes;
+}
+
 std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,
                               const std::vector<RigidBone>& bones) {
+  return overlayRigidBones(posedData, posedGrid, rest, bones, nullptr);
+}
+
+std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,
+                              const std::vector<RigidBone>& bones,
+                              const std::vector<Eigen::AlignedBox3i>* labelBoxes) {
   if (rest.data.size() != rest.grid.voxelCount())
     throw std::invalid_argument("rigid bones: volume sizes do not match their grids");
   if (!posedData && posedGrid.voxelCount() > 0) throw std::invalid_argument("rigid bones: null posed volume");
@@ -92,27 +128,36 @@ std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGri
     for (auto l : bones[b].labels)
       if (l >= 0) boneOfLabel[std::size_t(l)] = int(b);
   const auto& rd = rest.grid.dims;
-  // Bounding boxes in fixed chunks of slices, in parallel, then merged.
-  const std::size_t nChunks = std::max<std::size_t>(1, std::min<std::size_t>(64, std::size_t(rd[2])));
-  std::vector<std::vector<Eigen::AlignedBox3i>> chunkBox(nChunks, std::vector<Eigen::AlignedBox3i>(bones.size()));
-  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    for (std::size_t c = cb; c < ce; ++c) {
-      auto& box = chunkBox[c];
-      for (int k = int(c * std::size_t(rd[2]) / nChunks); k < int((c + 1) * std::size_t(rd[2]) / nChunks); ++k)
-        for (int j = 0; j < rd[1]; ++j) {
-          const std::int32_t* row = rest.data.data() + rest.grid.linearIndex(0, j, k);
-          for (int i = 0; i < rd[0]; ++i) {
-            const std::int32_t l = row[i];
-            if (l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0)
-              box[std::size_t(boneOfLabel[std::size_t(l)])].extend(Eigen::Vector3i(i, j, k));
-          }
-        }
-    }
-  }, 1);
   std::vector<Eigen::AlignedBox3i> restBox(bones.size());
-  for (const auto& box : chunkBox)
+  if (labelBoxes && !labelBoxes->empty()) {
+    // A bone's box is the union of its labels' boxes.
     for (std::size_t b = 0; b < bones.size(); ++b)
-      if (!box[b].isEmpty()) restBox[b].extend(box[b]);
+      for (auto l : bones[b].labels)
+        if (l > 0 && boneOfLabel[std::size_t(l)] == int(b) && std::size_t(l) < labelBoxes->size() &&
+            !(*labelBoxes)[std::size_t(l)].isEmpty())
+          restBox[b].extend((*labelBoxes)[std::size_t(l)]);
+  } else {
+    // Bounding boxes in fixed chunks of slices, in parallel, then merged.
+    const std::size_t nChunks = std::max<std::size_t>(1, std::min<std::size_t>(64, std::size_t(rd[2])));
+    std::vector<std::vector<Eigen::AlignedBox3i>> chunkBox(nChunks, std::vector<Eigen::AlignedBox3i>(bones.size()));
+    parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
+      for (std::size_t c = cb; c < ce; ++c) {
+        auto& box = chunkBox[c];
+        for (int k = int(c * std::size_t(rd[2]) / nChunks); k < int((c + 1) * std::size_t(rd[2]) / nChunks); ++k)
+          for (int j = 0; j < rd[1]; ++j) {
+            const std::int32_t* row = rest.data.data() + rest.grid.linearIndex(0, j, k);
+            for (int i = 0; i < rd[0]; ++i) {
+              const std::int32_t l = row[i];
+              if (l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0)
+                box[std::size_t(boneOfLabel[std::size_t(l)])].extend(Eigen::Vector3i(i, j, k));
+            }
+          }
+      }
+    }, 1);
+    for (const auto& box : chunkBox)
+      for (std::size_t b = 0; b < bones.size(); ++b)
+        if (!box[b].isEmpty()) restBox[b].extend(box[b]);
+  }
   auto isBone = [&](std::int32_t l) { return l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0; };
 
   std::atomic<std::size_t> changed{0};
