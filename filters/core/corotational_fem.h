@@ -33,10 +33,9 @@ struct CorotationalOptions {
   /// volume is only kept to first order (sum of the principal stretches, not their product).
   /// FixedCorotated: the nonlinear, inversion-safe energy
   ///   psi(F) = mu |F - R|^2 + lambda/2 (det F - 1)^2   (Stomakhin et al. 2012)
-  /// plus the inversion penalty below
-  /// minimized by Gauss-Newton (its Hessian 2 mu (g_a.g_b) I + lambda (cof F g_a)(cof F g_b)^T is
-  /// PSD even for inverted tets) with PCG and a backtracking line search that accepts a step only
-  /// if it lowers the energy and does not increase the number of inverted tets.
+  /// plus the inversion penalty below, minimized by projected Newton (per-tet Hessians with their
+  /// negative eigenvalues clamped, Smith et al. 2019) with PCG and a backtracking line search that
+  /// accepts a step only if it lowers the energy and does not increase the number of inverted tets.
   enum Model { Linear, FixedCorotated };
   Model model = Linear;
   /// FixedCorotated: at most this many Gauss-Newton iterations.
