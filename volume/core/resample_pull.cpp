@@ -821,8 +821,8 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
     }, 1);
 
     // 3b. Voxels outside the posed mesh that the extension left empty (or background) although at
-    // least 5 of their 6 neighbours were written with tissue: wedge gaps where the inflated boundary tets of a convex ridge do not
-    // quite meet. They are filled from those neighbours (the most common label, or the mean
+    // least 5 of their 6 neighbours were written with tissue: wedge gaps where the inflated boundary
+    // tets of a convex ridge do not quite meet. They are filled from those neighbours (the most common label, or the mean
     // intensity), so the posed skin has no pinholes. Voxels inside the posed mesh are never touched.
     // Such a voxel has at least 3 written neighbours in the 4 adjacent rows, so only rows next to
     // written rows are visited.
@@ -834,11 +834,12 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
     // Repeated while it fills anything: a voxel filled in one pass counts as written in the next
     // (within a pass marks do not change, so the result does not depend on the thread count).
     constexpr std::uint8_t kFilled = 4;
-    // The row test above for voxel (i, j, k): at least 3 of the 4 adjacent rows hold written voxels and
-    // i lies within their spans.
-    auto inSpans = [&](int i, int j, int k) {
+    // The 4 rows adjacent to row (j, k): how many hold written voxels, and the union [ib, ie] of
+    // their spans.
+    auto adjacentSpans = [&](int j, int k, int& ib, int& ie) {
       const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
-      int count = 0, ib = nx, ie = -1;
+      int count = 0;
+      ib = nx, ie = -1;
       for (const auto& jk : nbr)
         if (hasSpan(jk[0], jk[1])) {
           ++count;
@@ -846,7 +847,13 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           ib = std::min(ib, first[row]);
           ie = std::max(ie, last[row]);
         }
-      return count >= 3 && i >= ib && i <= ie;
+      return count;
+    };
+    // The row test for voxel (i, j, k): at least 3 of the 4 adjacent rows hold written voxels and
+    // i lies within their spans.
+    auto inSpans = [&](int i, int j, int k) {
+      int ib, ie;
+      return adjacentSpans(j, k, ib, ie) >= 3 && i >= ib && i <= ie;
     };
     // Voxel v = (i, j, k) filled in this pass: appended to `to` (written after the pass).
     auto tryFill = [&](int i, int j, int k, std::vector<std::pair<std::size_t, T>>& to, std::size_t& local) {
@@ -878,16 +885,8 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
       std::size_t local = 0;
       for (int k = int(kb); k < int(ke); ++k)
         for (int j = 0; j < ny; ++j) {
-          const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
-          int count = 0, ib = nx, ie = -1;
-          for (const auto& jk : nbr)
-            if (hasSpan(jk[0], jk[1])) {
-              ++count;
-              const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
-              ib = std::min(ib, first[row]);
-              ie = std::max(ie, last[row]);
-            }
-          if (count < 3) continue;
+          int ib, ie;
+          if (adjacentSpans(j, k, ib, ie) < 3) continue;
           for (int i = ib; i <= ie; ++i) tryFill(i, j, k, filled[std::size_t(k)], local);
         }
       filledInVoi += local;
