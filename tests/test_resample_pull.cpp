@@ -261,6 +261,18 @@ TEST(TetBoundary, BoxFacesAreExactlyTheSurfaceTriangles) {
   }
   EXPECT_EQ(onSurface, B.boundaryFaces);
   EXPECT_EQ(B.boundaryTets, tetsWithFace);
+  // A tet touches the boundary iff one of its nodes lies on the box's surface.
+  ASSERT_EQ(B.touchesBoundary.size(), std::size_t(T.rows()));
+  std::size_t touching = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    bool any = false;
+    for (int a = 0; a < 4; ++a)
+      for (int c = 0; c < 3; ++c) any = any || V(T(t, a), c) == 0.0 || V(T(t, a), c) == double(n[c]);
+    EXPECT_EQ(bool(B.touchesBoundary[std::size_t(t)]), any) << "tet " << t;
+    touching += any;
+  }
+  EXPECT_GT(touching, B.boundaryTets);  // also tets with only an edge or a node on the surface
+  EXPECT_LT(touching, std::size_t(T.rows()));
   Tets bad = T;
   bad(0, 0) = -1;
   EXPECT_THROW(repose::tetBoundary(bad), std::invalid_argument);
@@ -349,6 +361,63 @@ TEST(ResamplePull, ExtrapolationMatchesRigidOracleIncludingOuterLayer) {
   EXPECT_LE(std::max(written, inside) - std::min(written, inside), nearBoundary + out.voxelCount() / 10000);
 }
 
+TEST(ResamplePull, ExtrapolationFollowsAnAffinePoseAndStaysConnectedToTheBody) {
+  // A labelled grid meshed only from voxel centre 3 to dims - 4 (three layers peeled), posed by a
+  // shear and stretch: every tet has the same affine map, so each extrapolated voxel must hold the
+  // nearest rest label at the inverse image of its centre, and be reached from a covered voxel through
+  // written voxels.
+  const ImageGrid g = testGrid();
+  const repose::LabelVolume L = blockLabels(g);
+  Points V;
+  Tets T;
+  boxMesh(Eigen::Vector3d(3, 3, 3), Eigen::Vector3d(g.dims[0] - 4, g.dims[1] - 4, g.dims[2] - 4), {5, 6, 4}, V, T);
+  for (Eigen::Index v = 0; v < V.rows(); ++v) V.row(v) = g.indexToPhysical(V.row(v).transpose()).transpose();
+  if (g.direction.determinant() < 0) T.col(2).swap(T.col(3));
+  Eigen::Matrix3d A;
+  A << 1.3, 0.2, 0.0, 0.0, 0.9, 0.15, 0.1, 0.0, 1.1;
+  const Eigen::Vector3d c(2.0, -1.0, 35.0);
+  Points P(V.rows(), 3);
+  for (Eigen::Index v = 0; v < V.rows(); ++v) P.row(v) = (A * (V.row(v).transpose() - c) + c).transpose();
+  const ImageGrid out = repose::posedOutputGrid(g, P, 6);
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;
+  repose::PullResampleReport rep, plainRep;
+  const repose::LabelVolume O = repose::resampleLabelsPull(L, V, P, T, out, opt, 0, &rep);
+  const repose::LabelVolume covered = repose::resampleLabelsPull(L, V, P, T, out, 0, &plainRep);
+  EXPECT_EQ(rep.coveredVoxels, plainRep.coveredVoxels);
+  ASSERT_GT(rep.extrapolatedVoxels, rep.coveredVoxels / 10);
+  const Eigen::Matrix3d Ainv = A.inverse();
+  std::size_t written = 0, mismatches = 0;
+  std::vector<std::uint8_t> reached(out.voxelCount(), 0);
+  std::vector<std::size_t> queue;
+  for (std::size_t v = 0; v < O.data.size(); ++v) {
+    if (O.data[v] == 0) continue;
+    ++written;
+    const int i = int(v % std::size_t(out.dims[0])), j = int(v / std::size_t(out.dims[0]) % std::size_t(out.dims[1])),
+              k = int(v / (std::size_t(out.dims[0]) * std::size_t(out.dims[1])));
+    const Eigen::Vector3d x = Ainv * (out.indexToPhysical(Eigen::Vector3d(i, j, k)) - c) + c;
+    mismatches += O.data[v] != nearestRest(L, x);
+    if (covered.data[v] != 0) {
+      EXPECT_EQ(O.data[v], covered.data[v]);  // extrapolation never overwrites a covered voxel
+      reached[v] = 1;
+      queue.push_back(v);
+    }
+  }
+  // Nearest-label ties on voxel borders may go either way.
+  EXPECT_LE(mismatches, written / 200);
+  const std::size_t sx = 1, sy = std::size_t(out.dims[0]), sz = sy * std::size_t(out.dims[1]);
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const std::size_t v = queue[q];
+    for (const std::size_t w : {v - sx, v + sx, v - sy, v + sy, v - sz, v + sz})
+      if (w < O.data.size() && !reached[w] && O.data[w] != 0) {
+        reached[w] = 1;
+        queue.push_back(w);
+      }
+  }
+  EXPECT_EQ(queue.size(), written);  // no extrapolated voxel is detached from the body
+}
+
 TEST(ResamplePull, ExtrapolationNeverPaintsBackground) {
   // Two boxes with a background gap (i = 11, 12) between them at rest.
   ImageGrid g;
@@ -391,15 +460,16 @@ TEST(ResamplePull, ExtrapolationNeverPaintsBackground) {
 }
 
 TEST(ResamplePull, RestCoverageKeepsExtensionsOutOfNeighbourInteriors) {
-  // An "arm" B resting against a "torso" A (labels touch, meshes peeled apart), then moved away by 4.
+  // An "arm" B resting against a "torso" A (labels touch, meshes peeled apart), then moved away by 10,
+  // far enough that the voxels next to A are extrapolated from A alone.
   ImageGrid g;
-  g.dims = {32, 8, 8};
+  g.dims = {44, 8, 8};
   repose::LabelVolume L;
   L.grid = g;
   L.data.assign(g.voxelCount(), 0);
   for (int k = 0; k < 8; ++k)
     for (int j = 0; j < 8; ++j)
-      for (int i = 0; i < 32; ++i) L.at(i, j, k) = i <= 10 ? 3 : i <= 26 ? 5 : 0;
+      for (int i = 0; i < 44; ++i) L.at(i, j, k) = i <= 10 ? 3 : i <= 26 ? 5 : 0;
   Points VA, VB;
   Tets TA, TB;
   boxMesh(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(9, 6, 6), {4, 3, 3}, VA, TA);
@@ -409,7 +479,7 @@ TEST(ResamplePull, RestCoverageKeepsExtensionsOutOfNeighbourInteriors) {
   Tets T(TA.rows() + TB.rows(), 4);
   T << TA, (TB.array() + int(VA.rows())).matrix();
   Points P = V;
-  P.bottomRows(VB.rows()).col(0).array() += 4.0;
+  P.bottomRows(VB.rows()).col(0).array() += 10.0;
   const repose::TetBoundary B = repose::tetBoundary(T);
   const repose::MaskVolume C = repose::restMeshCoverage(g, V, T);
   repose::PullResampleOptions opt;
@@ -420,11 +490,13 @@ TEST(ResamplePull, RestCoverageKeepsExtensionsOutOfNeighbourInteriors) {
   const repose::LabelVolume with = repose::resampleLabelsPull(L, V, P, T, g, opt, 0);
   for (int k = 2; k <= 5; ++k)
     for (int j = 2; j <= 5; ++j) {
-      // Posed i = 14: A's extension samples rest i = 14, deep inside B (which has moved away).
+      // Posed i = 14: A's extrapolation samples rest i = 14, deep inside B (which has moved away).
       EXPECT_EQ(without.at(14, j, k), 5);
       EXPECT_NE(with.at(14, j, k), 5) << j << " " << k;
       EXPECT_EQ(with.at(10, j, k), 3);  // A's own skin layer is still restored
-      EXPECT_EQ(with.at(30, j, k), 5);  // and B's, moved along with B
+      EXPECT_EQ(with.at(21, j, k), 5);  // and B's on both sides, moved along with B
+      EXPECT_EQ(with.at(36, j, k), 5);
+      EXPECT_EQ(with.at(37, j, k), 0);  // rest background beyond B stays background
     }
   repose::MaskVolume wrong = C;
   wrong.data.pop_back();

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -23,8 +24,8 @@ namespace {
 constexpr double kBaryEps = 1e-7;
 // Per-voxel coverage marks.
 constexpr std::uint8_t kEmpty = 0, kCovered = 1, kExtrapolated = 2;
-// Extrapolated voxels farther than this many 6-steps from the posed mesh's voxels are detached debris.
-constexpr int kAttachReach = 4;
+// Passes of the pinhole fill (each reads one 6-step further).
+constexpr int kFillPasses = 4;
 
 void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& restNodes,
               const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
@@ -62,7 +63,8 @@ void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& res
                                     std::to_string(outGrid.dims[0]) + " " + std::to_string(outGrid.dims[1]) + " " +
                                     std::to_string(outGrid.dims[2]) + ")");
   }
-  if (options.boundary && options.boundary->boundaryFaceMask.size() != std::size_t(tets.rows()))
+  if (options.boundary && (options.boundary->boundaryFaceMask.size() != std::size_t(tets.rows()) ||
+                           options.boundary->touchesBoundary.size() != std::size_t(tets.rows())))
     throw std::invalid_argument("pull resample: tet boundary has " +
                                 std::to_string(options.boundary->boundaryFaceMask.size()) + " tets but the mesh has " +
                                 std::to_string(tets.rows()) + "; compute it with tetBoundary(tets)");
@@ -278,57 +280,6 @@ inline void scanTet(TetSetup& s, const int lo[3], const int hi[3], Emit&& emit) 
   }
 }
 
-// The tet inflated by λ_a >= -δ_a: the simplex with barycentrics (λ_a + δ_a) / (1 + Σδ), i.e. vertices
-// q_c = (1 + Σδ) p_c - Σ_b δ_b p_b (a homothety, so orientation is kept). Rest vertices likewise,
-// which extends the tet's affine map.
-void inflate(const Vertices& p, const float* delta, Vertices& q) {
-  double S = 0, sum[3] = {0, 0, 0};
-  for (int b = 0; b < 4; ++b) {
-    S += delta[b];
-    for (int m = 0; m < 3; ++m) sum[m] += delta[b] * p[b][m];
-  }
-  for (int c = 0; c < 4; ++c)
-    for (int m = 0; m < 3; ++m) q[c][m] = (1.0 + S) * p[c][m] - sum[m];
-}
-
-// Setup of the tet inflated by λ_a >= -δ_a (q: its posed vertices) from the tet's own setup `s`: its
-// barycentrics are (λ_a + δ_a) / (1 + Σδ), and the homothety moves the posed and rest vertices alike,
-// so the rest map is the tet's.
-void inflatedSetup(const TetSetup& s, const Vertices& q, const float* delta, TetSetup& x) {
-  double S = 0;
-  for (int a = 0; a < 4; ++a) S += delta[a];
-  const double w = 1.0 / (1.0 + S);
-  for (int a = 0; a < 4; ++a) {
-    for (int m = 0; m < 3; ++m) x.g[a][m] = s.g[a][m] * w;
-    x.c[a] = (s.c[a] - kBaryEps + delta[a]) * w + kBaryEps;
-  }
-  for (int m = 0; m < 3; ++m) {
-    for (int k = 0; k < 3; ++k) x.A[m][k] = s.A[m][k];
-    x.b[m] = s.b[m];
-    x.lo[m] = std::min(std::min(q[0][m], q[1][m]), std::min(q[2][m], q[3][m]));
-    x.hi[m] = std::max(std::max(q[0][m], q[1][m]), std::max(q[2][m], q[3][m]));
-    x.p0[m] = q[0][m];
-  }
-  for (int a = 0; a < 4; ++a) {
-    x.vy[a] = q[a][1];
-    x.vz[a] = q[a][2];
-  }
-  x.rest = nullptr;
-  x.mapReady = true;
-  x.restInside = false;
-}
-
-// Distance (mm) of a voxel of row (j, k) beyond the boundary faces of the (uninflated) tet it is
-// extrapolated from: max over relaxed faces a of -λ_a h_a, with λ_a linear in i.
-struct FaceDistance {
-  double alpha[4], beta[4], h[4];  // λ_a = alpha + beta i; h_a = 0 for faces not relaxed
-  double at(int i) const {
-    double m = 0;
-    for (int a = 0; a < 4; ++a) m = std::max(m, -(alpha[a] + beta[a] * i) * h[a]);
-    return m;
-  }
-};
-
 // Output voxels worked on: an index box of the output grid (bounds inclusive), stored i fastest.
 struct Box {
   int lo[3], hi[3], n[3];
@@ -359,11 +310,21 @@ struct Sample {
   T value;
 };
 
+// A voxel (index in the work box, or in its z-range within ChunkSamples) and a tet it is covered by or
+// extrapolated from.
+template <class Index>
+struct VoxelTet {
+  Index v;
+  std::uint32_t t;
+};
+
 // Samples of a fixed chunk of consecutive tets (in tet order), split by z-range of the work box so the
-// ranges can be written in parallel.
+// ranges can be written in parallel; `front` holds the voxels covered by tets touching the mesh
+// boundary, the seeds of the extrapolation.
 template <class T>
 struct ChunkSamples {
-  std::vector<std::vector<Sample<T>>> cover, extend;
+  std::vector<std::vector<Sample<T>>> cover;
+  std::vector<std::vector<VoxelTet<std::uint32_t>>> front;
   std::size_t inverted = 0;
 };
 
@@ -400,15 +361,16 @@ inline void restStart(const TetSetup& s, int i0, int j, const double* rk, double
 }
 
 // Kernels turn a run of voxels (i0..i1, j) of a tet into samples: push(i - i0, value).
-//   cover(s, i0, i1, j, rk, push)       pass 1: every voxel of the run
-//   extend(s, i0, i1, j, rk, fd, push)  pass 2 (extension): only voxels it may write
+//   cover(s, i0, i1, j, rk, push)     pass 1: every voxel of the run
+//   extendAt(r, distance, value)      extrapolation: the value at rest index r of a voxel `distance` mm
+//                                     outside the tet it is extrapolated from; false = not written
 struct LabelKernel {
   using Value = std::int32_t;
   const std::int32_t* src;
   int dx, dy, dz;
   std::int32_t background;
   const std::uint8_t* restCovered;  // may be null
-  double nearFace;                  // mm beyond its own faces within which an extension may sample covered voxels
+  double nearFace;                  // mm outside its tet within which an extrapolation may sample covered voxels
 
   // Nearest voxel: the one whose footprint [c-0.5, c+0.5) holds the rest point. With r shifted by +0.5
   // the index is the truncation, and the rest index steps by a constant vector along the row.
@@ -430,19 +392,14 @@ struct LabelKernel {
         push(i - i0, inside(r) ? src[index(r)] : background);
     }
   }
-  template <class Push>
-  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, const FaceDistance& fd, Push&& push) const {
-    double r[3];
-    restStart(s, i0, j, rk, 0.5, r);
-    const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
-    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
-      if (!inside(r)) continue;
-      const std::size_t n = index(r);
-      const std::int32_t v = src[n];
-      if (v == background) continue;  // never paint background over a neighbour's extension
-      if (restCovered && restCovered[n] && fd.at(i) > nearFace) continue;  // another part's interior
-      push(i - i0, v);
-    }
+  bool extendAt(const double r0[3], double distance, std::int32_t& value) const {
+    const double r[3] = {r0[0] + 0.5, r0[1] + 0.5, r0[2] + 0.5};
+    if (!inside(r)) return false;
+    const std::size_t n = index(r);
+    if (src[n] == background) return false;  // never paint background: another tet may reach it
+    if (restCovered && restCovered[n] && distance > nearFace) return false;  // another part's interior
+    value = src[n];
+    return true;
   }
 };
 
@@ -452,7 +409,7 @@ struct IntensityKernel {
   int dx, dy, dz;
   float background;
   const std::uint8_t* restCovered;  // may be null
-  double nearFace;                  // mm beyond its own faces within which an extension may sample covered voxels
+  double nearFace;                  // mm outside its tet within which an extrapolation may sample covered voxels
 
   bool inside(const double r[3]) const {
     return r[0] >= -0.5 && r[1] >= -0.5 && r[2] >= -0.5 && r[0] < dx - 0.5 && r[1] < dy - 0.5 && r[2] < dz - 0.5;
@@ -488,20 +445,15 @@ struct IntensityKernel {
     for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
       push(i - i0, s.restInside || inside(r) ? sample(r) : background);
   }
-  template <class Push>
-  void extend(const TetSetup& s, int i0, int i1, int j, const double* rk, const FaceDistance& fd, Push&& push) const {
-    double r[3];
-    restStart(s, i0, j, rk, 0.0, r);
-    const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
-    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) {
-      if (!inside(r)) continue;
-      if (restCovered) {
-        const std::size_t n = (std::size_t(int(r[2] + 0.5)) * std::size_t(dy) + std::size_t(int(r[1] + 0.5))) *
-                                  std::size_t(dx) + std::size_t(int(r[0] + 0.5));
-        if (restCovered[n] && fd.at(i) > nearFace) continue;
-      }
-      push(i - i0, sample(r));
+  bool extendAt(const double r[3], double distance, float& value) const {
+    if (!inside(r)) return false;
+    if (restCovered) {
+      const std::size_t n = (std::size_t(int(r[2] + 0.5)) * std::size_t(dy) + std::size_t(int(r[1] + 0.5))) *
+                                std::size_t(dx) + std::size_t(int(r[0] + 0.5));
+      if (restCovered[n] && distance > nearFace) return false;
     }
+    value = sample(r);
+    return true;
   }
 };
 
@@ -512,8 +464,7 @@ struct CoverageKernel {
   void cover(const TetSetup&, int i0, int i1, int, const double*, Push&& push) const {
     for (int i = i0; i <= i1; ++i) push(i - i0, std::uint8_t(1));
   }
-  template <class Push>
-  void extend(const TetSetup&, int, int, int, const double*, const FaceDistance&, Push&&) const {}
+  bool extendAt(const double*, double, std::uint8_t&) const { return false; }
 };
 
 // First and last non-empty mark of a row ([n, -1] if none), by 8-byte words.
@@ -553,14 +504,61 @@ std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
   return best;
 }
 
+// The posed tet t's barycentric coordinates at x (output index space) give `distance`, how far (mm) x
+// lies outside the tet (the largest of -λ_a times the tet's height over face a; 0 inside), and r, the
+// rest index of x under the tet's affine map. False for a flat or inverted tet.
+bool tetExtension(const std::vector<float>& P, const std::vector<float>& R, const Tets& tets, std::size_t t,
+                  const double x[3], const Eigen::Vector3d& invSpacing, double orient, double& distance,
+                  double r[3]) {
+  Vertices p;
+  loadVertices(P, tets, t, p);
+  double e[3][3], n[3][3];
+  for (int q = 0; q < 3; ++q)
+    for (int m = 0; m < 3; ++m) e[q][m] = p[q + 1][m] - p[0][m];
+  for (int q = 0; q < 3; ++q) {
+    const double* u = e[(q + 1) % 3];
+    const double* w = e[(q + 2) % 3];
+    n[q][0] = u[1] * w[2] - u[2] * w[1];
+    n[q][1] = u[2] * w[0] - u[0] * w[2];
+    n[q][2] = u[0] * w[1] - u[1] * w[0];
+  }
+  const double det = e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
+  if (!(orient * det > 0)) return false;
+  const double d[3] = {x[0] - p[0][0], x[1] - p[0][1], x[2] - p[0][2]};
+  double lambda[4], g[4][3];
+  lambda[0] = 1.0;
+  for (int m = 0; m < 3; ++m) g[0][m] = 0;
+  for (int q = 0; q < 3; ++q) {
+    lambda[q + 1] = (n[q][0] * d[0] + n[q][1] * d[1] + n[q][2] * d[2]) / det;
+    lambda[0] -= lambda[q + 1];
+    for (int m = 0; m < 3; ++m) {
+      g[q + 1][m] = n[q][m] / det;
+      g[0][m] -= g[q + 1][m];
+    }
+  }
+  distance = 0;
+  for (int a = 0; a < 4; ++a)
+    if (lambda[a] < 0) {
+      // |physical gradient of λ_a| = 1 / height (the direction matrix is orthonormal).
+      const double gx = g[a][0] * invSpacing[0], gy = g[a][1] * invSpacing[1], gz = g[a][2] * invSpacing[2];
+      distance = std::max(distance, -lambda[a] / std::sqrt(gx * gx + gy * gy + gz * gz));
+    }
+  for (int m = 0; m < 3; ++m) r[m] = 0;
+  for (int a = 0; a < 4; ++a) {
+    const std::size_t v = std::size_t(tets(t, a)) * 3;
+    for (int m = 0; m < 3; ++m) r[m] += lambda[a] * double(R[v + m]);
+  }
+  return true;
+}
+
 // The whole resampling of the output voxels in `voi` (output index box) into `dst` (voi's voxels, i
 // fastest). Work is O(#tets + written voxels) plus filling dst:
-//  1. one pass over fixed chunks of tets (each set up once): pass-1 samples of every voxel centre in a
-//     tet, extension samples of the inflated boundary tets, kept per chunk and z-range;
-//  2. per z-range, pass-1 samples written from the last tet to the first (the lowest-numbered tet
-//     covering a voxel wins), then extension samples from the first tet on into voxels still empty;
-//  3. with extrapolation, detached extrapolated voxels dropped and pinholes filled, visiting only
-//     the rows that hold written voxels.
+//  1. one pass over fixed chunks of tets (each set up once): samples of every voxel centre in a tet,
+//     kept per chunk and z-range, and the voxels of tets touching the mesh boundary;
+//  2. per z-range, the samples written from the last tet to the first (the lowest-numbered tet
+//     covering a voxel wins);
+//  3. with extrapolation, the mesh's outside grown layer by layer on the voxel grid (below), then
+//     pinholes filled, visiting only the rows that hold written voxels.
 // With extrapolation the work box is `voi` grown by the reach of step 3, so a sub-extent gets exactly
 // the values of the full resample.
 template <class Kernel, class Combine>
@@ -572,10 +570,14 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
   using T = typename Kernel::Value;
   const double distance = options.extrapolationDistance < 0 ? 2.0 * restGrid.spacing.maxCoeff()
                                                              : options.extrapolationDistance;
-  const std::uint8_t* boundary =
-      options.boundary && distance > 0 ? options.boundary->boundaryFaceMask.data() : nullptr;
-  // Step 3 reads marks up to kAttachReach + 1 voxels away.
-  const int pad = boundary ? kAttachReach + 1 : 0;
+  const bool extrapolate = options.boundary && distance > 0;
+  // Layers of extrapolation: enough 6-steps to reach `distance` along an axis of the finest spacing, and
+  // two more for the diagonal steps around convex corners and for meshes coarser than the voxels
+  // (their boundary faces cut corners of the peeled mask).
+  const int layers = extrapolate ? int(std::min(64.0, std::ceil(distance / outGrid.spacing.minCoeff()))) + 2 : 0;
+  // Step 3 reads marks up to layers + kFillPasses + 1 voxels away.
+  const int pad = extrapolate ? layers + kFillPasses + 1 : 0;
+  const std::uint8_t* touches = extrapolate ? options.boundary->touchesBoundary.data() : nullptr;
   int wlo[3], whi[3];
   for (int a = 0; a < 3; ++a) {
     wlo[a] = std::max(0, voi.lo[a] - pad);
@@ -626,18 +628,17 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
   const std::size_t nChunks = std::min<std::size_t>(512, std::max<std::size_t>(1, nT / 4096));
   std::vector<ChunkSamples<T>> chunks(nChunks);
   parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    Vertices p, r, q;
-    TetSetup st, xs, sm;
-    float delta[4];
+    Vertices p, r;
+    TetSetup st{}, sm{};
     for (std::size_t c = cb; c < ce; ++c) {
       ChunkSamples<T>& C = chunks[c];
       C.cover.resize(std::size_t(nRanges));
-      C.extend.resize(std::size_t(nRanges));
+      C.front.resize(std::size_t(nRanges));
       for (std::size_t t = c * nT / nChunks, te = (c + 1) * nT / nChunks; t < te; ++t) {
         // Tets finer than the voxels often hold no voxel centre at all.
         int lb[3], ub[3];
-        const bool covers = latticeBox(P, tets, t, W, lb, ub);
-        const bool extends = boundary && boundary[t];
+        if (!latticeBox(P, tets, t, W, lb, ub)) continue;
+        const bool front = touches && touches[t];
         loadVertices(P, tets, t, p);
         // Edges, and the rows of their inverse times det (for setupTet).
         double e[3][3], n[3][3];
@@ -660,9 +661,8 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           ++C.inverted;
           continue;
         }
-        if (!covers && !extends) continue;
-        const int candidates = covers ? (ub[0] - lb[0] + 1) * (ub[1] - lb[1] + 1) * (ub[2] - lb[2] + 1) : 0;
-        if (candidates > 0 && candidates <= 8) {
+        const int candidates = (ub[0] - lb[0] + 1) * (ub[1] - lb[1] + 1) * (ub[2] - lb[2] + 1);
+        if (candidates <= 8) {
           // Few candidate centres: test them directly; the rest map only once one is inside.
           const double inv = 1.0 / det;
           for (int q1 = 0; q1 < 3; ++q1) {
@@ -694,49 +694,29 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
                 kernel.cover(sm, i, i, j, rk, [&](int off, T value) {
                   C.cover[g].push_back({std::uint32_t(base + std::size_t(off)), value});
                 });
+                if (front) C.front[g].push_back({std::uint32_t(base), std::uint32_t(t)});
               }
-          if (!extends) continue;
+          continue;
         }
         loadVertices(R, tets, t, r);
         setupTet(p, r, n, det, st);
-        if (candidates > 8) {
-          st.restInside = restInside(r, restDims);
-          scanTet(st, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
-            auto& out1 = C.cover[rangeOf[std::size_t(k - W.lo[2])]];
-            const std::size_t base = W.index(i0, j, k) - rangeBase[rangeOf[std::size_t(k - W.lo[2])]];
-            kernel.cover(st, i0, i1, j, rk, [&](int off, T value) {
-              out1.push_back({std::uint32_t(base + std::size_t(off)), value});
-            });
+        st.restInside = restInside(r, restDims);
+        scanTet(st, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
+          const std::size_t g = rangeOf[std::size_t(k - W.lo[2])];
+          auto& out1 = C.cover[g];
+          const std::size_t base = W.index(i0, j, k) - rangeBase[g];
+          kernel.cover(st, i0, i1, j, rk, [&](int off, T value) {
+            out1.push_back({std::uint32_t(base + std::size_t(off)), value});
           });
-        }
-        if (!extends) continue;
-        // Inflated by λ_a >= -δ_a, δ_a = d / h_a, h_a (mm) = 1 / |physical gradient of λ_a|.
-        for (int a = 0; a < 4; ++a) {
-          const Eigen::Vector3d g(st.g[a][0], st.g[a][1], st.g[a][2]);
-          delta[a] = (boundary[t] >> a) & 1 ? float(distance * g.cwiseProduct(invSpacing).norm()) : 0.0f;
-        }
-        inflate(p, delta, q);
-        setupMap(st);
-        inflatedSetup(st, q, delta, xs);
-        FaceDistance fd;
-        for (int a = 0; a < 4; ++a) fd.h[a] = delta[a] > 0 ? distance / delta[a] : 0.0;  // h_a = d / δ_a
-        scanTet(xs, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
-          for (int a = 0; a < 4; ++a) {
-            fd.alpha[a] = st.g[a][1] * j + st.g[a][2] * k + st.c[a] - kBaryEps;
-            fd.beta[a] = st.g[a][0];
-          }
-          auto& out2 = C.extend[rangeOf[std::size_t(k - W.lo[2])]];
-          const std::size_t base = W.index(i0, j, k) - rangeBase[rangeOf[std::size_t(k - W.lo[2])]];
-          kernel.extend(xs, i0, i1, j, rk, fd, [&](int off, T value) {
-            out2.push_back({std::uint32_t(base + std::size_t(off)), value});
-          });
+          if (front)
+            for (int i = i0; i <= i1; ++i)
+              C.front[g].push_back({std::uint32_t(base + std::size_t(i - i0)), std::uint32_t(t)});
         });
       }
     }
   }, 1);
 
   // 2. Writes, one z-range per task.
-  std::vector<std::vector<std::size_t>> extrapolated(static_cast<std::size_t>(nRanges));
   parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
     for (std::size_t g = rb; g < re; ++g) {
       T* rangeOut = out + rangeBase[g];
@@ -748,18 +728,117 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
           rangeMarks[S[q1].v] = kCovered;
         }
       }
-      auto& X = extrapolated[g];
-      for (std::size_t c = 0; c < nChunks; ++c)
-        for (const auto& s : chunks[c].extend[g])
-          if (rangeMarks[s.v] == kEmpty) {
-            rangeOut[s.v] = s.value;
-            rangeMarks[s.v] = kExtrapolated;
-            X.push_back(rangeBase[g] + s.v);
-          }
     }
   }, 1);
   std::size_t inverted = 0;
   for (auto& C : chunks) inverted += C.inverted;
+
+  if (extrapolate) {
+    // 3a. Extrapolation. The mesh stops short of the body's outer voxel layer (the mask is peeled
+    // before meshing), so the outside of the posed mesh is grown on the voxel grid, layer by layer of
+    // 6-neighbours: a voxel of the next layer is extrapolated from the tets of its neighbours in the
+    // current one (starting from the covered voxels next to empty ones, with the lowest-numbered tet
+    // touching the mesh boundary that covers them); of those, the tet it lies least far outside of
+    // and whose sample the kernel accepts (labels never write background) wins. Each extrapolated
+    // voxel is thus connected to the posed body, and the work is proportional to the voxels written.
+    using Seed = VoxelTet<std::size_t>;
+    auto emptyNeighbours = [&](std::size_t v, std::size_t* w) {
+      const std::size_t row = v / std::size_t(nx);
+      const int i = int(v - row * std::size_t(nx));
+      const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
+      int n = 0;
+      // Ascending offsets, so that the neighbours of a sorted list come out as six sorted lists.
+      if (k > 0 && marks[v - sliceSize] == kEmpty) w[n++] = v - sliceSize;
+      if (j > 0 && marks[v - std::size_t(nx)] == kEmpty) w[n++] = v - std::size_t(nx);
+      if (i > 0 && marks[v - 1] == kEmpty) w[n++] = v - 1;
+      if (i + 1 < nx && marks[v + 1] == kEmpty) w[n++] = v + 1;
+      if (j + 1 < ny && marks[v + std::size_t(nx)] == kEmpty) w[n++] = v + std::size_t(nx);
+      if (k + 1 < nz && marks[v + sliceSize] == kEmpty) w[n++] = v + sliceSize;
+      return n;
+    };
+    std::vector<std::vector<Seed>> seeds(static_cast<std::size_t>(nRanges));
+    parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
+      std::size_t w[6];
+      for (std::size_t g = rb; g < re; ++g) {
+        auto& S = seeds[g];
+        for (const auto& C : chunks)
+          for (const auto& f : C.front[g])
+            if (emptyNeighbours(rangeBase[g] + f.v, w) > 0) S.push_back({rangeBase[g] + f.v, f.t});
+        std::sort(S.begin(), S.end(), [](const Seed& x, const Seed& y) { return x.v != y.v ? x.v < y.v : x.t < y.t; });
+        S.erase(std::unique(S.begin(), S.end(), [](const Seed& x, const Seed& y) { return x.v == y.v; }), S.end());
+      }
+    }, 1);
+    std::vector<ChunkSamples<T>>().swap(chunks);
+    std::vector<Seed> layer;
+    for (auto& S : seeds) layer.insert(layer.end(), S.begin(), S.end());
+    std::vector<std::vector<Seed>>().swap(seeds);
+
+    std::vector<Seed> candidates, merged, streams[6];
+    std::vector<std::size_t> groups;
+    std::vector<std::uint32_t> bestTet;
+    std::vector<T> bestValue;
+    for (int step = 0; step < layers && !layer.empty(); ++step) {
+      // Candidates (voxel, tet) sorted by voxel then tet: six sorted lists, one per neighbour offset,
+      // merged.
+      for (auto& S : streams) S.clear();
+      for (const Seed& s : layer) {
+        const std::size_t row = s.v / std::size_t(nx);
+        const int i = int(s.v - row * std::size_t(nx));
+        const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
+        const bool ok[6] = {k > 0, j > 0, i > 0, i + 1 < nx, j + 1 < ny, k + 1 < nz};
+        const std::ptrdiff_t off[6] = {-std::ptrdiff_t(sliceSize), -std::ptrdiff_t(nx), -1, 1, std::ptrdiff_t(nx),
+                                       std::ptrdiff_t(sliceSize)};
+        for (int q = 0; q < 6; ++q)
+          if (ok[q]) {
+            const std::size_t n = std::size_t(std::ptrdiff_t(s.v) + off[q]);
+            if (marks[n] == kEmpty) streams[q].push_back({n, s.t});
+          }
+      }
+      auto less = [](const Seed& x, const Seed& y) { return x.v != y.v ? x.v < y.v : x.t < y.t; };
+      candidates = streams[0];
+      for (int q = 1; q < 6; ++q) {
+        merged.resize(candidates.size() + streams[q].size());
+        std::merge(candidates.begin(), candidates.end(), streams[q].begin(), streams[q].end(), merged.begin(), less);
+        candidates.swap(merged);
+      }
+      groups.clear();
+      for (std::size_t q = 0; q < candidates.size(); ++q)
+        if (q == 0 || candidates[q].v != candidates[q - 1].v) groups.push_back(q);
+      const std::size_t nGroups = groups.size();
+      groups.push_back(candidates.size());
+      bestTet.assign(nGroups, std::numeric_limits<std::uint32_t>::max());
+      bestValue.resize(nGroups);
+      parallelFor(nGroups, [&](std::size_t gb, std::size_t ge) {
+        for (std::size_t q = gb; q < ge; ++q) {
+          const std::size_t v = candidates[groups[q]].v;
+          const std::size_t row = v / std::size_t(nx);
+          const double x[3] = {double(W.lo[0] + int(v - row * std::size_t(nx))),
+                               double(W.lo[1] + int(row % std::size_t(ny))), double(W.lo[2] + int(row / std::size_t(ny)))};
+          double best = std::numeric_limits<double>::infinity();  // the layers bound the reach
+          for (std::size_t c = groups[q]; c < groups[q + 1]; ++c) {
+            const std::uint32_t t = candidates[c].t;
+            if (c > groups[q] && t == candidates[c - 1].t) continue;
+            double dist, r[3];
+            T value;
+            if (!tetExtension(P, R, tets, t, x, invSpacing, orient, dist, r) || !(dist <= best)) continue;
+            if (dist == best && bestTet[q] != std::numeric_limits<std::uint32_t>::max()) continue;
+            if (!kernel.extendAt(r, dist, value)) continue;
+            best = dist;
+            bestTet[q] = t;
+            bestValue[q] = value;
+          }
+        }
+      }, 256);
+      layer.clear();
+      for (std::size_t q = 0; q < nGroups; ++q)
+        if (bestTet[q] != std::numeric_limits<std::uint32_t>::max()) {
+          const std::size_t v = candidates[groups[q]].v;
+          out[v] = bestValue[q];
+          marks[v] = kExtrapolated;
+          layer.push_back({v, bestTet[q]});
+        }
+    }
+  }
   std::vector<ChunkSamples<T>>().swap(chunks);
 
   // Rows holding written voxels: [first, last] of each (first > last if none).
@@ -769,61 +848,12 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
   }, 256);
 
   std::atomic<std::size_t> filledInVoi{0};
-  if (boundary) {
-    // 3a. Extrapolated voxels must hang on to the body: in a concave crease the inflated boundary tets
-    // fan out and can copy skin a voxel or two away from the posed surface. Keeps the extrapolated
-    // voxels 6-connected (within kAttachReach steps) to voxels inside the posed mesh; the others
-    // become background (marked empty again). Breadth-first by whole steps (Jacobi), so the result
-    // does not depend on the visiting order.
-    constexpr std::uint8_t kAttached = 3;
-    auto attachedNeighbour = [&](std::size_t v) {
-      const std::size_t row = v / std::size_t(nx);
-      const int i = int(v - row * std::size_t(nx));
-      const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
-      auto ok = [&](std::size_t w) { return marks[w] == kCovered || marks[w] == kAttached; };
-      return (i > 0 && ok(v - 1)) || (i + 1 < nx && ok(v + 1)) || (j > 0 && ok(v - std::size_t(nx))) ||
-             (j + 1 < ny && ok(v + std::size_t(nx))) || (k > 0 && ok(v - sliceSize)) ||
-             (k + 1 < nz && ok(v + sliceSize));
-    };
-    std::vector<std::vector<std::size_t>> pending = extrapolated, attached(static_cast<std::size_t>(nRanges));
-    for (int pass = 0; pass < kAttachReach; ++pass) {
-      std::atomic<std::size_t> changed{0};
-      parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
-        for (std::size_t g = rb; g < re; ++g) {
-          auto& A = attached[g];
-          A.clear();
-          std::size_t keep = 0;
-          for (std::size_t v : pending[g]) {
-            if (attachedNeighbour(v))
-              A.push_back(v);
-            else
-              pending[g][keep++] = v;
-          }
-          pending[g].resize(keep);
-          changed += A.size();
-        }
-      }, 1);
-      if (changed.load() == 0) break;
-      parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
-        for (std::size_t g = rb; g < re; ++g)
-          for (std::size_t v : attached[g]) marks[v] = kAttached;
-      }, 1);
-    }
-    parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
-      for (std::size_t g = rb; g < re; ++g) {
-        for (std::size_t v : pending[g]) {
-          out[v] = background;
-          marks[v] = kEmpty;
-        }
-        for (std::size_t v : extrapolated[g])
-          if (marks[v] == kAttached) marks[v] = kExtrapolated;
-      }
-    }, 1);
-
-    // 3b. Voxels outside the posed mesh that the extension left empty (or background) although at
-    // least 5 of their 6 neighbours were written with tissue: wedge gaps where the inflated boundary
-    // tets of a convex ridge do not quite meet. They are filled from those neighbours (the most common label, or the mean
-    // intensity), so the posed skin has no pinholes. Voxels inside the posed mesh are never touched.
+  if (extrapolate) {
+    // 3b. Voxels outside the posed mesh that the extrapolation left empty (or background) although at
+    // least 5 of their 6 neighbours were written with tissue: gaps where the rest point of every
+    // candidate tet fell on background or outside the rest grid, e.g. in a crease where two skin
+    // surfaces of the posed body meet. They are filled from those neighbours (the most common label, or
+    // the mean intensity), so the posed skin has no pinholes. Voxels inside the posed mesh are never touched.
     // Such a voxel has at least 3 written neighbours in the 4 adjacent rows, so only rows next to
     // written rows are visited.
     auto hasSpan = [&](int j, int k) {
@@ -858,8 +888,7 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
     // Voxel v = (i, j, k) filled in this pass: appended to `to` (written after the pass).
     auto tryFill = [&](int i, int j, int k, std::vector<std::pair<std::size_t, T>>& to, std::size_t& local) {
       const std::size_t v = std::size_t(k) * sliceSize + std::size_t(j) * nx + std::size_t(i);
-      // Also an extrapolated voxel that read background: its inflated tet reached past the
-      // rest body (in a crease, where two skin surfaces of the posed body meet).
+      // Also an extrapolated intensity voxel that equals the background value.
       if (marks[v] != kEmpty && !(marks[v] == kExtrapolated && out[v] == background)) return;
       T values[6];
       int n = 0;

@@ -21,24 +21,26 @@ struct PullResampleReport {
 };
 
 /// The mesh usually stops short of the body's outer voxel layer (the mask is peeled before meshing), so
-/// the boundary tets are extrapolated outward: each tet with a face on the mesh boundary is inflated
-/// through that face (barycentric λ_a >= -d / h_a for the vertex a opposite the face, h_a its height
-/// over the face in the posed tet) and its affine map is applied there too. The extension writes only
-/// voxels no tet covers; labels only when the sampled rest label is not background, intensities only
-/// when the rest point lies in the rest grid.
+/// the posed mesh is extrapolated outward on the voxel grid, one layer of 6-neighbours after another
+/// (ceil(d / finest spacing) + 2 layers): a voxel no tet covers takes the affine map of a tet its
+/// written neighbour was covered by or extrapolated from, the one it lies least far outside of (max
+/// over faces of -λ_a h_a, h_a the tet's height over face a). It writes labels only when the sampled
+/// rest label is not background, intensities only when the rest point lies in the rest grid.
+/// Extrapolated voxels are thus always connected to the posed body.
 struct PullResampleOptions {
   /// Boundary faces of `tets` (tetBoundary(tets)); null = no extrapolation.
   const TetBoundary* boundary = nullptr;
-  /// d in mm; negative = 2 x the largest spacing of the rest grid; 0 = no extrapolation.
+  /// d in mm, the reach of the extrapolation (above); negative = 2 x the largest spacing of the rest
+  /// grid; 0 = no extrapolation.
   double extrapolationDistance = -1.0;
-  /// Optional restMeshCoverage(rest grid, restNodes, tets): the extension then samples rest voxels
-  /// inside the rest mesh only within one voxel (largest spacing) of its own boundary face, so a boundary
-  /// tet's extension does not copy a neighbouring part's interior (e.g. an arm resting against the
-  /// torso, then raised), while points just outside its own face may still round to voxels just inside.
+  /// Optional restMeshCoverage(rest grid, restNodes, tets): the extrapolation then samples rest voxels
+  /// inside the rest mesh only within one voxel (largest spacing) of its tet, so it does not copy a
+  /// neighbouring part's interior (e.g. an arm resting against the torso, then raised), while points
+  /// just outside the tet may still round to voxels just inside.
   const MaskVolume* restCoverage = nullptr;
   /// Optional output sub-extent {i0, i1, j0, j1, k0, k1} (inclusive voxel indices of outGrid), e.g. the
   /// slices a viewer shows: only those voxels are produced, and they equal the same voxels of the full
-  /// resample (the extrapolation's clean-up looks a few voxels beyond the extent to ensure that). The
+  /// resample (the extrapolation looks a few voxels beyond the extent to ensure that). The
   /// result's grid is extentGrid(outGrid, extent). Unset = the whole grid.
   std::optional<std::array<int, 6>> outputExtent;
 };

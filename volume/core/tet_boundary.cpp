@@ -14,6 +14,7 @@ TetBoundary tetBoundary(const Tets& tets) {
   TetBoundary out;
   const std::size_t nT = std::size_t(tets.rows());
   out.boundaryFaceMask.assign(nT, 0);
+  out.touchesBoundary.assign(nT, 0);
   if (nT == 0) return out;
   if (tets.minCoeff() < 0) throw std::invalid_argument("tet boundary: negative tet node index");
   if (nT >= (std::size_t(1) << 30)) throw std::invalid_argument("tet boundary: more than 2^30 tets");
@@ -72,6 +73,17 @@ TetBoundary tetBoundary(const Tets& tets) {
     out.boundaryFaces += std::size_t(isBoundary[4 * t]) + isBoundary[4 * t + 1] + isBoundary[4 * t + 2] + isBoundary[4 * t + 3];
     out.boundaryTets += m != 0;
   }
+  std::vector<std::uint8_t> onBoundary(nV, 0);
+  for (std::size_t t = 0; t < nT; ++t)
+    for (int a = 0; a < 4; ++a)
+      if ((out.boundaryFaceMask[t] >> a) & 1)
+        for (int c = 0; c < 4; ++c)
+          if (c != a) onBoundary[std::size_t(tets(t, c))] = 1;
+  parallelFor(nT, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t)
+      out.touchesBoundary[t] = onBoundary[std::size_t(tets(t, 0))] | onBoundary[std::size_t(tets(t, 1))] |
+                               onBoundary[std::size_t(tets(t, 2))] | onBoundary[std::size_t(tets(t, 3))];
+  }, 4096);
   return out;
 }
 

@@ -11,6 +11,9 @@ namespace repose {
 struct TetBoundary {
   /// #T: bit a (0..3) set = the face opposite local vertex a of the tet is on the mesh boundary.
   std::vector<std::uint8_t> boundaryFaceMask;
+  /// #T: 1 if any node of the tet lies on a boundary face (the tets a voxel just outside the mesh is
+  /// extrapolated from).
+  std::vector<std::uint8_t> touchesBoundary;
   std::size_t boundaryFaces = 0;  ///< number of set bits
   std::size_t boundaryTets = 0;   ///< tets with at least one boundary face
 };
