@@ -7,7 +7,7 @@
 // extended to hold the posed body (+PaddingVoxels), same spacing and direction matrix.
 // Nearest: int labels (VTK_INT output); Linear: trilinear intensities (VTK_FLOAT output).
 // The tet mesh stops short of the body's outer voxel layer (the mask is peeled before meshing), so the
-// boundary tets are extrapolated outward by ExtrapolationDistance; the mesh boundary, the rest tets,
+// posed mesh is extrapolated outward on the voxel grid by ExtrapolationDistance; the mesh boundary, the rest tets,
 // nodes and scalars are converted once and cached between poses. RestrictToSubExtent resamples only a
 // block of the output (e.g. the slices a viewer shows).
 
@@ -39,9 +39,11 @@ public:
   vtkSetClampMacro(PaddingVoxels, int, 0, 1000);
   vtkGetMacro(PaddingVoxels, int);
 
-  /// How far (mm) the boundary tets are extrapolated outward to fill voxels outside the mesh: labels
-  /// only where the sampled rest label is not BackgroundValue, intensities only inside the rest image.
-  /// Negative = automatic (2 x the rest image's largest spacing, the default); 0 = off.
+  /// How far (mm) the posed mesh is extrapolated outward to fill voxels outside it: ceil(distance /
+  /// finest spacing) + 2 layers of voxel neighbours, each voxel taking the map of the neighbouring tet
+  /// it lies least far outside of; labels only where the sampled rest label is not BackgroundValue,
+  /// intensities only inside the rest image. Negative = automatic (2 x the rest image's largest
+  /// spacing, the default); 0 = off.
   vtkSetMacro(ExtrapolationDistance, double);
   vtkGetMacro(ExtrapolationDistance, double);
 
