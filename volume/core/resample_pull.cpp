@@ -504,15 +504,9 @@ std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
   return best;
 }
 
-// The posed tet t's barycentric coordinates at x (output index space) give `distance`, how far (mm) x
-// lies outside the tet (the largest of -λ_a times the tet's height over face a; 0 inside), and r, the
-// rest index of x under the tet's affine map. False for a flat or inverted tet.
-bool tetExtension(const std::vector<float>& P, const std::vector<float>& R, const Tets& tets, std::size_t t,
-                  const double x[3], const Eigen::Vector3d& invSpacing, double orient, double& distance,
-                  double r[3]) {
-  Vertices p;
-  loadVertices(P, tets, t, p);
-  double e[3][3], n[3][3];
+// Edges e_q = p_{q+1} - p_0 of a tet and n_q = e_{q+1} x e_{q+2} (the rows of the inverse of the edge
+// matrix times its determinant); returns the determinant e_0 . n_0.
+inline double edgeCofactors(const Vertices& p, double e[3][3], double n[3][3]) {
   for (int q = 0; q < 3; ++q)
     for (int m = 0; m < 3; ++m) e[q][m] = p[q + 1][m] - p[0][m];
   for (int q = 0; q < 3; ++q) {
@@ -522,7 +516,19 @@ bool tetExtension(const std::vector<float>& P, const std::vector<float>& R, cons
     n[q][1] = u[2] * w[0] - u[0] * w[2];
     n[q][2] = u[0] * w[1] - u[1] * w[0];
   }
-  const double det = e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
+  return e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
+}
+
+// The posed tet t's barycentric coordinates at x (output index space) give `distance`, how far (mm) x
+// lies outside the tet (the largest of -λ_a times the tet's height over face a; 0 inside), and r, the
+// rest index of x under the tet's affine map. False for a flat or inverted tet.
+bool tetExtension(const std::vector<float>& P, const std::vector<float>& R, const Tets& tets, std::size_t t,
+                  const double x[3], const Eigen::Vector3d& invSpacing, double orient, double& distance,
+                  double r[3]) {
+  Vertices p;
+  loadVertices(P, tets, t, p);
+  double e[3][3], n[3][3];
+  const double det = edgeCofactors(p, e, n);
   if (!(orient * det > 0)) return false;
   const double d[3] = {x[0] - p[0][0], x[1] - p[0][1], x[2] - p[0][2]};
   double lambda[4], g[4][3];
@@ -642,16 +648,7 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
         loadVertices(P, tets, t, p);
         // Edges, and the rows of their inverse times det (for setupTet).
         double e[3][3], n[3][3];
-        for (int q1 = 0; q1 < 3; ++q1)
-          for (int m = 0; m < 3; ++m) e[q1][m] = p[q1 + 1][m] - p[0][m];
-        for (int q1 = 0; q1 < 3; ++q1) {
-          const double* u = e[(q1 + 1) % 3];
-          const double* w = e[(q1 + 2) % 3];
-          n[q1][0] = u[1] * w[2] - u[2] * w[1];
-          n[q1][1] = u[2] * w[0] - u[0] * w[2];
-          n[q1][2] = u[0] * w[1] - u[1] * w[0];
-        }
-        const double det = e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
+        const double det = edgeCofactors(p, e, n);
         // Inverted or flat: orient * det <= 1e-12 x the product of the edge lengths.
         const double od = orient * det;
         const double l2 = (e[0][0] * e[0][0] + e[0][1] * e[0][1] + e[0][2] * e[0][2]) *
