@@ -28,8 +28,9 @@ public:
   vtkSetClampMacro(MaxIterations, int, 1, 1000000);
   vtkGetMacro(MaxIterations, int);
   /// 0 = Jacobi-PCG (Eigen), 1 = incomplete-Cholesky PCG, 2 = CHOLMOD direct solve,
-  /// 3 = block-Jacobi PCG on float 3x3 blocks (default).
-  vtkSetClampMacro(Preconditioner, int, 0, 3);
+  /// 3 = block-Jacobi PCG on float 3x3 blocks (default), 4 = the same PCG with a two-level
+  /// preconditioner (block Jacobi plus rigid-body modes of node aggregates).
+  vtkSetClampMacro(Preconditioner, int, 0, 4);
   vtkGetMacro(Preconditioner, int);
   /// 0 = linear corotational, 1 = fixed-corotated (nonlinear, default).
   vtkSetClampMacro(Model, int, 0, 1);

@@ -26,8 +26,13 @@ struct CorotationalOptions {
   /// call, numeric factorization per outer / Newton iteration) and a direct solve.
   /// BlockJacobi (default): our CG on the matrix stored as float 3x3 blocks (a third of the memory
   /// traffic), preconditioned by the inverses of the diagonal blocks, threaded.
-  enum Preconditioner { Jacobi, IncompleteCholesky, Cholmod, BlockJacobi };
+  /// TwoLevel: the same block CG with a two-level preconditioner, block Jacobi plus a coarse
+  /// correction by the rigid-body modes of aggregates of about coarseAggregateSize nodes
+  /// (see two_level_preconditioner.h).
+  enum Preconditioner { Jacobi, IncompleteCholesky, Cholmod, BlockJacobi, TwoLevel };
   Preconditioner preconditioner = BlockJacobi;
+  /// TwoLevel: target nodes per aggregate. Larger: a smaller coarse matrix, more CG iterations.
+  int coarseAggregateSize = 200;
 
   /// Linear: linearized corotational elasticity (Mueller & Gross), outerIterations solves; its
   /// volume is only kept to first order (sum of the principal stretches, not their product).
