@@ -290,6 +290,28 @@ TEST(FixedCorotatedFem, InvariantToRigidMotionOfTheWholeProblem) {
   EXPECT_GT((x - posed).cwiseAbs().maxCoeff(), 1e-3);
 }
 
+// The two-level preconditioner inside Newton (aggregates from the rest pose, rigid modes about the
+// bent pose) reaches the minimum the direct solver does.
+TEST(FixedCorotatedFem, TwoLevelPreconditionerReachesTheDirectSolversMinimum) {
+  const Box b = makeBox(12, 4, 4, 1.0);
+  std::vector<int> fixed;
+  Points posed;
+  bentBox(b, 0.8, fixed, posed);
+  Points x[2];
+  for (int k = 0; k < 2; ++k) {
+    CorotationalOptions opt = fixedCorotated(k == 0 ? CorotationalOptions::Cholmod : CorotationalOptions::TwoLevel);
+    opt.stepTolerance = 1e-6;
+    opt.coarseAggregateSize = 20;  // several aggregates on this small mesh
+    x[k] = posed;
+    CorotationalReport rep;
+    repose::relaxCorotational(b.nodes, b.tets, fixed, x[k], opt, &rep);
+    EXPECT_TRUE(rep.converged) << "preconditioner " << opt.preconditioner;
+    EXPECT_EQ(rep.invertedAfter, 0);
+  }
+  EXPECT_LT((x[1] - x[0]).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_GT((x[1] - posed).cwiseAbs().maxCoeff(), 1e-2);
+}
+
 // The squeezed block of NearlyIncompressibleSqueezedBlockKeepsVolume under the nonlinear model:
 // det F is kept to second order too, so the volume is kept far better than by the linear model.
 TEST(FixedCorotatedFem, NearlyIncompressibleSqueezedBlockKeepsVolume) {
@@ -412,6 +434,9 @@ TEST(CorotationalFem, BadInput) {
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
   o2 = CorotationalOptions{};
   o2.stepTolerance = 0;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
+  o2 = CorotationalOptions{};
+  o2.coarseAggregateSize = 0;
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
   // No fixed node: singular.
   std::vector<int> none(b.nodes.rows(), -1);
