@@ -100,7 +100,7 @@ struct CorotationalReport {
 /// cgIterations / relativeResidual are then per Newton iteration); the number of inverted tets never
 /// increases, and inverted skinned tets are pushed back since the energy is finite and smooth
 /// through det F = 0. Young's modulus scales the energy only: the minimizer does not depend on it.
-/// Throws std::runtime_error if the incomplete Cholesky or CHOLMOD factorization fails.
+/// Throws std::runtime_error if the incomplete Cholesky, CHOLMOD or two-level coarse factorization fails.
 void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
                        Points& posed, const CorotationalOptions& options,
                        CorotationalReport* report = nullptr);
