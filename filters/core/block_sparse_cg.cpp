@@ -138,11 +138,11 @@ BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::V
   const double threshold = tolerance * bNorm;
   double rNorm = std::sqrt(rr);
   int it = 0;
+  double rz = 0;
   if (rNorm > threshold) {
-    M.apply(r, z);
+    rz = M.apply(r, z);
     p = z;
   }
-  double rz = r.dot(z);
   while (rNorm > threshold && it < maxIterations) {
     A.multiply(p, q);
     double pq = 0;
@@ -160,10 +160,7 @@ BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::V
     ++it;
     rNorm = std::sqrt(rrNew);
     if (rNorm <= threshold) break;
-    M.apply(r, z);
-    double rzNew = 0;
-#pragma omp parallel for schedule(static, 4096) reduction(+ : rzNew)
-    for (Eigen::Index k = 0; k < m; ++k) rzNew += r[k] * z[k];
+    const double rzNew = M.apply(r, z);
     const double beta = rzNew / rz;
     rz = rzNew;
 #pragma omp parallel for schedule(static, 4096)

@@ -31,11 +31,12 @@ std::vector<Eigen::Matrix3d> blockDiagonalInverses(const BlockSparseMatrix3f& A)
 BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                             double tolerance, int maxIterations);
 
-/// z = M^-1 r for a symmetric positive definite M (e.g. two_level_preconditioner.h).
+/// z = M^-1 r for a symmetric positive definite M (e.g. two_level_preconditioner.h); returns r . z,
+/// summed in the pass that writes z (one pass over the vectors less per CG iteration).
 class BlockPreconditioner {
  public:
   virtual ~BlockPreconditioner() = default;
-  virtual void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const = 0;
+  virtual double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const = 0;
 };
 
 /// The same CG with any preconditioner (the vector updates are threaded but not fused with it).

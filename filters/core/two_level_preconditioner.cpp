@@ -39,8 +39,10 @@ struct TwoLevelPreconditioner::Impl {
   Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> llt;  // supernodal if that pays
   bool analyzed = false;
 
-  std::vector<Mat3> diagonalInverse;
-  std::vector<Vec3> offset;  // node minus its aggregate's centroid, over the aggregate's rms radius
+  // In float, as the CG matrix: the passes of apply() are bound by memory traffic. Ac is formed
+  // from the rounded offsets, so P^T and P stay each other's transposes (M stays symmetric).
+  std::vector<Eigen::Matrix3f> diagonalInverse;
+  std::vector<Eigen::Vector3f> offset;  // node minus its aggregate's centroid, over the aggregate's rms radius
   mutable Eigen::VectorXd coarseRhs, coarseSolution, partial;
 
   /// coarseRhs = P^T r, in node order (a gather per aggregate would jump through r) into one
@@ -61,7 +63,7 @@ struct TwoLevelPreconditioner::Impl {
         double* c = sum + coarseOffset[std::size_t(a)];
         c[0] += ri.x(), c[1] += ri.y(), c[2] += ri.z();
         if (modes[std::size_t(a)] == 6) {
-          const Vec3 torque = offset[std::size_t(i)].cross(ri);
+          const Vec3 torque = offset[std::size_t(i)].cast<double>().cross(ri);
           c[3] += torque.x(), c[4] += torque.y(), c[5] += torque.z();
         }
       }
@@ -74,19 +76,23 @@ struct TwoLevelPreconditioner::Impl {
     }
   }
 
-  /// z = D^-1 r + P Ac^-1 P^T r.
-  void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
+  /// z = D^-1 r + P Ac^-1 P^T r; returns r . z.
+  double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
     restrictTo(r);
     coarseSolution = llt.solve(coarseRhs);
     z.resize(r.size());
-#pragma omp parallel for schedule(static, 512)
+    double rz = 0;
+#pragma omp parallel for schedule(static, 512) reduction(+ : rz)
     for (int i = 0; i < n; ++i) {
       const int a = aggregateOf[std::size_t(i)];
       const int o = coarseOffset[std::size_t(a)];
-      Vec3 zi = coarseSolution.segment<3>(o) + diagonalInverse[std::size_t(i)] * r.segment<3>(3 * Eigen::Index(i));
-      if (modes[std::size_t(a)] == 6) zi += coarseSolution.segment<3>(o + 3).cross(offset[std::size_t(i)]);
+      Vec3 zi = coarseSolution.segment<3>(o) +
+                diagonalInverse[std::size_t(i)].cast<double>() * r.segment<3>(3 * Eigen::Index(i));
+      if (modes[std::size_t(a)] == 6) zi += coarseSolution.segment<3>(o + 3).cross(offset[std::size_t(i)].cast<double>());
       z.segment<3>(3 * Eigen::Index(i)) = zi;
+      rz += zi.dot(r.segment<3>(3 * Eigen::Index(i)));
     }
+    return rz;
   }
 };
 
@@ -276,7 +282,11 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
   Impl& s = *impl_;
   if (A.rows() != s.n || positions.rows() != s.n)
     throw std::invalid_argument("TwoLevelPreconditioner::update: sizes differ from aggregate()");
-  s.diagonalInverse = blockDiagonalInverses(A);
+  {
+    const std::vector<Mat3> inverse = blockDiagonalInverses(A);
+    s.diagonalInverse.resize(inverse.size());
+    for (std::size_t i = 0; i < inverse.size(); ++i) s.diagonalInverse[i] = inverse[i].cast<float>();
+  }
   const int m = aggregates();
 
   // Rigid modes about the current centroids, offsets scaled by the aggregate's rms radius so that
@@ -293,7 +303,7 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
     const double scale = r2 > 0 ? 1.0 / std::sqrt(r2 / double(e - b)) : 1.0;
     for (int k = b; k < e; ++k) {
       const int i = s.node[std::size_t(k)];
-      s.offset[std::size_t(i)] = scale * (positions.row(i).transpose() - centroid);
+      s.offset[std::size_t(i)] = (scale * (positions.row(i).transpose() - centroid)).cast<float>();
     }
   }
 
@@ -331,9 +341,9 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
             C.setZero();
           }
           C.leftCols<3>() += Aij;
-          C.rightCols<3>() += Aij * rotationModes(s.offset[std::size_t(j)]);
+          C.rightCols<3>() += Aij * rotationModes(s.offset[std::size_t(j)].cast<double>());
         }
-        const Mat3 SiT = rotationModes(s.offset[std::size_t(i)]).transpose();
+        const Mat3 SiT = rotationModes(s.offset[std::size_t(i)].cast<double>()).transpose();
         for (int sl : touched) {
           inRow[std::size_t(sl)] = 0;
           const Mat36& C = row[std::size_t(sl)];
@@ -363,6 +373,6 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
     throw std::runtime_error("TwoLevelPreconditioner: the coarse matrix is not positive definite");
 }
 
-void TwoLevelPreconditioner::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { impl_->apply(r, z); }
+double TwoLevelPreconditioner::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { return impl_->apply(r, z); }
 
 }  // namespace repose

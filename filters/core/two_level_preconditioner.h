@@ -36,7 +36,7 @@ class TwoLevelPreconditioner : public BlockPreconditioner {
   /// Throws std::runtime_error if the factorization fails.
   void update(const BlockSparseMatrix3f& A, const Points& positions);
 
-  void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
+  double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
 
  private:
   struct Impl;
