@@ -438,6 +438,9 @@ TEST(CorotationalFem, BadInput) {
   o2 = CorotationalOptions{};
   o2.coarseAggregateSize = 0;
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
+  o2 = CorotationalOptions{};
+  o2.twoLevelBelowTolerance = -1;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
   // No fixed node: singular.
   std::vector<int> none(b.nodes.rows(), -1);
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, none, posed, opt), std::invalid_argument);

@@ -112,7 +112,7 @@ class SpdSolver {
       if (rn > tolerance * bn) {
         Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
         BlockCgResult r;
-        if (options_.preconditioner == CorotationalOptions::TwoLevel) {
+        if (options_.preconditioner == CorotationalOptions::TwoLevel && tolerance < options_.twoLevelBelowTolerance) {
           prepareTwoLevel();
           r = preconditionedBlockCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
         } else {
@@ -496,6 +496,8 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     throw std::invalid_argument("relaxCorotational: maxCgIterations must be >= 1");
   if (options.coarseAggregateSize < 1)
     throw std::invalid_argument("relaxCorotational: coarseAggregateSize must be >= 1");
+  if (!(options.twoLevelBelowTolerance >= 0.0))
+    throw std::invalid_argument("relaxCorotational: twoLevelBelowTolerance must be >= 0");
   if (options.maxNewtonIterations < 1)
     throw std::invalid_argument("relaxCorotational: maxNewtonIterations must be >= 1");
   if (!(options.stepTolerance > 0.0))
