@@ -51,11 +51,10 @@ struct TwoLevelPreconditioner::Impl {
     const int nc = coarseOffset.back();
     coarseRhs.resize(nc);
     const int threads = omp_get_max_threads();
-    partial.resize(Eigen::Index(threads) * nc);
+    partial.setZero(Eigen::Index(threads) * nc);  // all of it: the team may be smaller
 #pragma omp parallel
     {
       double* sum = partial.data() + std::size_t(omp_get_thread_num()) * std::size_t(nc);
-      std::fill(sum, sum + nc, 0.0);
 #pragma omp for schedule(static)
       for (int i = 0; i < n; ++i) {
         const int a = aggregateOf[std::size_t(i)];
