@@ -33,12 +33,13 @@ struct CorotationalOptions {
   Preconditioner preconditioner = BlockJacobi;
   /// TwoLevel: target nodes per aggregate. Larger: a smaller coarse matrix, more CG iterations.
   int coarseAggregateSize = 200;
-  /// TwoLevel: solves with a looser relative tolerance than this (FixedCorotated's early Newton
-  /// iterations) use block Jacobi alone. Far from the minimum a truncated block-Jacobi CG moves the
-  /// nodes locally, which the line search needs: a coarse-corrected step follows the projected
-  /// Hessian's flat global modes, and Newton then takes more iterations. Near the minimum the
-  /// tolerances tighten, and there the coarse space saves most of the CG iterations.
-  double twoLevelBelowTolerance = 0.02;
+  /// TwoLevel: solves with a looser relative tolerance than this (FixedCorotated's first Newton
+  /// iterations, whose forcing term is at its cap of 0.1) use block Jacobi alone. Far from the
+  /// minimum a truncated block-Jacobi CG moves the nodes locally, which the line search needs: a
+  /// coarse-corrected step follows the projected Hessian's flat global modes, and Newton then takes
+  /// more iterations (small phantom: 14 instead of 9). Once the tolerance tightens, the coarse space
+  /// saves most of the CG iterations.
+  double twoLevelBelowTolerance = 0.06;
 
   /// Linear: linearized corotational elasticity (Mueller & Gross), outerIterations solves; its
   /// volume is only kept to first order (sum of the principal stretches, not their product).
