@@ -93,7 +93,7 @@ def main():
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
-    ap.add_argument("--solvers", default="block,jacobi")
+    ap.add_argument("--solvers", default="twolevel,block")
     ap.add_argument("--models", default="fixed")
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")

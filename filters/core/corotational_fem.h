@@ -24,13 +24,13 @@ struct CorotationalOptions {
   /// ordering): fewer iterations, but the factorization and triangular solves cost more.
   /// Cholmod: no CG, a CHOLMOD supernodal Cholesky factorization (symbolic analysis once per
   /// call, numeric factorization per outer / Newton iteration) and a direct solve.
-  /// BlockJacobi (default): our CG on the matrix stored as float 3x3 blocks (a third of the memory
-  /// traffic), preconditioned by the inverses of the diagonal blocks, threaded.
-  /// TwoLevel: the same block CG with a two-level preconditioner, block Jacobi plus a coarse
+  /// BlockJacobi: our CG on the matrix stored as float 3x3 blocks (a third of the memory traffic),
+  /// preconditioned by the inverses of the diagonal blocks, threaded.
+  /// TwoLevel (default): the same block CG with a two-level preconditioner, block Jacobi plus a coarse
   /// correction by the rigid-body modes of aggregates of about coarseAggregateSize nodes
   /// (see two_level_preconditioner.h).
   enum Preconditioner { Jacobi, IncompleteCholesky, Cholmod, BlockJacobi, TwoLevel };
-  Preconditioner preconditioner = BlockJacobi;
+  Preconditioner preconditioner = TwoLevel;
   /// TwoLevel: target nodes per aggregate. Larger: a smaller coarse matrix, more CG iterations.
   int coarseAggregateSize = 200;
   /// TwoLevel: solves with a looser relative tolerance than this (FixedCorotated's first Newton
