@@ -93,7 +93,8 @@ int vtkReposeCorotationalRelax::RequestData(
     options.outerIterations = this->OuterIterations;
     options.tolerance = this->Tolerance;
     options.maxCgIterations = this->MaxIterations;
-    options.preconditioner = this->Preconditioner == 3 ? repose::CorotationalOptions::BlockJacobi
+    options.preconditioner = this->Preconditioner == 4 ? repose::CorotationalOptions::TwoLevel
+      : this->Preconditioner == 3                      ? repose::CorotationalOptions::BlockJacobi
       : this->Preconditioner == 2                      ? repose::CorotationalOptions::Cholmod
       : this->Preconditioner == 1                      ? repose::CorotationalOptions::IncompleteCholesky
                                                        : repose::CorotationalOptions::Jacobi;
@@ -146,7 +147,8 @@ void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Tolerance: " << this->Tolerance << "\n";
   os << indent << "MaxIterations: " << this->MaxIterations << "\n";
   os << indent << "Preconditioner: "
-     << (this->Preconditioner == 3   ? "BlockJacobi"
+     << (this->Preconditioner == 4   ? "TwoLevel"
+         : this->Preconditioner == 3 ? "BlockJacobi"
          : this->Preconditioner == 2 ? "CHOLMOD"
          : this->Preconditioner == 1 ? "IncompleteCholesky"
                                      : "Jacobi")

@@ -28,8 +28,9 @@ public:
   vtkSetClampMacro(MaxIterations, int, 1, 1000000);
   vtkGetMacro(MaxIterations, int);
   /// 0 = Jacobi-PCG (Eigen), 1 = incomplete-Cholesky PCG, 2 = CHOLMOD direct solve,
-  /// 3 = block-Jacobi PCG on float 3x3 blocks (default).
-  vtkSetClampMacro(Preconditioner, int, 0, 3);
+  /// 3 = block-Jacobi PCG on float 3x3 blocks, 4 = the same PCG with a two-level preconditioner
+  /// (block Jacobi plus rigid-body modes of node aggregates; default).
+  vtkSetClampMacro(Preconditioner, int, 0, 4);
   vtkGetMacro(Preconditioner, int);
   /// 0 = linear corotational, 1 = fixed-corotated (nonlinear, default).
   vtkSetClampMacro(Model, int, 0, 1);
@@ -73,7 +74,7 @@ protected:
   int OuterIterations = 1;
   double Tolerance = 1e-6;
   int MaxIterations = 2000;
-  int Preconditioner = 3;
+  int Preconditioner = 4;
   int Model = 1;
   int MaxNewtonIterations = 60;
   double StepTolerance = 0.01;

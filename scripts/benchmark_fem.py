@@ -3,7 +3,7 @@
 and peak memory of the corotational relaxation on the built-in phantoms, per linear solver.
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark_fem.py
-       [--sizes small,medium] [--solvers block,jacobi,ic,cholmod] [--models fixed,linear] [--repose build/bin/repose]
+       [--sizes small,medium] [--solvers block,twolevel,jacobi,ic,cholmod] [--models fixed,linear] [--repose build/bin/repose]
        [--work DIR] [--angle DEG]
 Each (size, model, solver) runs in its own process so that its peak resident memory is its own; the
 "skin only" row is the same process without the relaxation (the memory the FEM adds is the difference).
@@ -23,7 +23,7 @@ root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _package = os.path.join(root, "build", "lib", "python3", "dist-packages")
 sys.path.append(_package)
 os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (os.environ.get("PYTHONPATH"), _package) if p)
-SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2, "block": 3}
+SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2, "block": 3, "twolevel": 4}
 MODELS = {"linear": 0, "fixed": 1}
 
 
@@ -93,7 +93,7 @@ def main():
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
-    ap.add_argument("--solvers", default="block,jacobi")
+    ap.add_argument("--solvers", default="twolevel,block")
     ap.add_argument("--models", default="fixed")
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")

@@ -28,18 +28,8 @@ void BlockSparseMatrix3f::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y)
   }
 }
 
-BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
-                            double tolerance, int maxIterations) {
+std::vector<Eigen::Matrix3d> blockDiagonalInverses(const BlockSparseMatrix3f& A) {
   const int n = A.rows();
-  if (b.size() != 3 * Eigen::Index(n) || x.size() != b.size())
-    throw std::invalid_argument("blockJacobiCg: vector sizes do not match the matrix");
-  BlockCgResult result;
-  const double bNorm = b.norm();
-  if (!(bNorm > 0.0)) {
-    x.setZero();
-    return result;
-  }
-  // Inverses of the diagonal blocks.
   std::vector<Eigen::Matrix3d> inverse(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static, 1024)
   for (int i = 0; i < n; ++i) {
@@ -58,6 +48,21 @@ BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd&
       for (int r = 0; r < 3; ++r) inverse[std::size_t(i)](r, r) = D(r, r) > 0 ? 1.0 / D(r, r) : 0.0;
     }
   }
+  return inverse;
+}
+
+BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                            double tolerance, int maxIterations) {
+  const int n = A.rows();
+  if (b.size() != 3 * Eigen::Index(n) || x.size() != b.size())
+    throw std::invalid_argument("blockJacobiCg: vector sizes do not match the matrix");
+  BlockCgResult result;
+  const double bNorm = b.norm();
+  if (!(bNorm > 0.0)) {
+    x.setZero();
+    return result;
+  }
+  const std::vector<Eigen::Matrix3d> inverse = blockDiagonalInverses(A);
   // The vector updates are fused into two threaded passes per iteration (besides the product): on
   // two cores CG is bound by memory traffic, and serial vector operations would leave a core idle.
   const Eigen::Index m = b.size();
@@ -100,6 +105,62 @@ BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd&
     ++it;
     rNorm = std::sqrt(rrNew);
     if (rNorm <= threshold) break;
+    const double beta = rzNew / rz;
+    rz = rzNew;
+#pragma omp parallel for schedule(static, 4096)
+    for (Eigen::Index k = 0; k < m; ++k) p[k] = z[k] + beta * p[k];
+  }
+  result.iterations = it;
+  result.relativeResidual = rNorm / bNorm;
+  return result;
+}
+
+BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                                    double tolerance, int maxIterations, const BlockPreconditioner& M) {
+  const int n = A.rows();
+  if (b.size() != 3 * Eigen::Index(n) || x.size() != b.size())
+    throw std::invalid_argument("preconditionedBlockCg: vector sizes do not match the matrix");
+  BlockCgResult result;
+  const double bNorm = b.norm();
+  if (!(bNorm > 0.0)) {
+    x.setZero();
+    return result;
+  }
+  const Eigen::Index m = b.size();
+  Eigen::VectorXd r(m), z(m), p(m), q(m);
+  A.multiply(x, q);
+  double rr = 0;
+#pragma omp parallel for schedule(static, 4096) reduction(+ : rr)
+  for (Eigen::Index k = 0; k < m; ++k) {
+    r[k] = b[k] - q[k];
+    rr += r[k] * r[k];
+  }
+  const double threshold = tolerance * bNorm;
+  double rNorm = std::sqrt(rr);
+  int it = 0;
+  double rz = 0;
+  if (rNorm > threshold) {
+    rz = M.apply(r, z);
+    p = z;
+  }
+  while (rNorm > threshold && it < maxIterations) {
+    A.multiply(p, q);
+    double pq = 0;
+#pragma omp parallel for schedule(static, 4096) reduction(+ : pq)
+    for (Eigen::Index k = 0; k < m; ++k) pq += p[k] * q[k];
+    if (!(pq > 0.0)) break;
+    const double alpha = rz / pq;
+    double rrNew = 0;
+#pragma omp parallel for schedule(static, 4096) reduction(+ : rrNew)
+    for (Eigen::Index k = 0; k < m; ++k) {
+      x[k] += alpha * p[k];
+      r[k] -= alpha * q[k];
+      rrNew += r[k] * r[k];
+    }
+    ++it;
+    rNorm = std::sqrt(rrNew);
+    if (rNorm <= threshold) break;
+    const double rzNew = M.apply(r, z);
     const double beta = rzNew / rz;
     rz = rzNew;
 #pragma omp parallel for schedule(static, 4096)

@@ -22,10 +22,25 @@ struct BlockCgResult {
   double relativeResidual = 0.0;  ///< |b - A x| / |b| at exit (the recurrence's residual)
 };
 
+/// Inverses of the 3x3 diagonal blocks; a singular block falls back to the inverse of its diagonal.
+std::vector<Eigen::Matrix3d> blockDiagonalInverses(const BlockSparseMatrix3f& A);
+
 /// Preconditioned CG with the inverses of the 3x3 diagonal blocks (block Jacobi), warm-started from
 /// x; stops when |r| <= tolerance |b| or after maxIterations. A singular diagonal block falls back
 /// to the inverse of its diagonal.
 BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                             double tolerance, int maxIterations);
+
+/// z = M^-1 r for a symmetric positive definite M (e.g. two_level_preconditioner.h); returns r . z,
+/// summed in the pass that writes z (one pass over the vectors less per CG iteration).
+class BlockPreconditioner {
+ public:
+  virtual ~BlockPreconditioner() = default;
+  virtual double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const = 0;
+};
+
+/// The same CG with any preconditioner (the vector updates are threaded but not fused with it).
+BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                                    double tolerance, int maxIterations, const BlockPreconditioner& M);
 
 }  // namespace repose

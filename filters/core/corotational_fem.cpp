@@ -18,6 +18,7 @@
 #include "parallel_for.h"
 #include "signed_svd.h"
 #include "tet_untangling.h"
+#include "two_level_preconditioner.h"
 
 namespace repose {
 namespace {
@@ -89,9 +90,18 @@ class SpdSolver {
  public:
   explicit SpdSolver(const CorotationalOptions& o) : options_(o) {}
 
+  /// The nodes behind the unknowns (TwoLevel's aggregates and rigid modes): rest and current
+  /// positions of all nodes (current may change between solves) and the free node of each block row.
+  void setNodes(const Points& rest, const Points& current, const std::vector<int>& freeNodes) {
+    rest_ = &rest;
+    current_ = &current;
+    freeNodes_ = &freeNodes;
+  }
+
   void solve(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int& iterations,
              double& residual) {
-    if (options_.preconditioner == CorotationalOptions::BlockJacobi) {
+    if (options_.preconditioner == CorotationalOptions::BlockJacobi ||
+        options_.preconditioner == CorotationalOptions::TwoLevel) {
       // The float matrix solves for the correction to x only (the residual is formed in double), so
       // its rounding stays relative to the correction, not to the node coordinates.
       toBlocks(A);
@@ -101,7 +111,13 @@ class SpdSolver {
       residual = bn > 0 ? rn / bn : 0.0;
       if (rn > tolerance * bn) {
         Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
-        const BlockCgResult r = blockJacobiCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations);
+        BlockCgResult r;
+        if (options_.preconditioner == CorotationalOptions::TwoLevel && tolerance < options_.twoLevelBelowTolerance) {
+          prepareTwoLevel();
+          r = preconditionedBlockCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
+        } else {
+          r = blockJacobiCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations);
+        }
         x += dx;
         iterations = r.iterations;
         residual = r.relativeResidual * rn / bn;
@@ -154,6 +170,19 @@ class SpdSolver {
   }
 
  private:
+  Points freePositions(const Points& all) const {
+    Points p(Eigen::Index(freeNodes_->size()), 3);
+    for (std::size_t i = 0; i < freeNodes_->size(); ++i) p.row(Eigen::Index(i)) = all.row((*freeNodes_)[i]);
+    return p;
+  }
+
+  /// Aggregates from the rest pose once (the pattern is fixed), the coarse matrix per solve.
+  void prepareTwoLevel() {
+    if (!rest_) throw std::logic_error("SpdSolver: setNodes() is needed for the two-level preconditioner");
+    if (!twoLevel_.aggregated()) twoLevel_.aggregate(blocks_, freePositions(*rest_), options_.coarseAggregateSize);
+    twoLevel_.update(blocks_, freePositions(*current_));
+  }
+
   /// A's values as float 3x3 blocks. A holds one block row per free node: scalar column 3i + c
   /// (= row, A being symmetric) lists the row's blocks in order, 3 scalars each. The block pattern is
   /// built on the first call (A's pattern is fixed).
@@ -188,6 +217,10 @@ class SpdSolver {
   BlockSparseMatrix3f blocks_;
   Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> cholmod_;
   bool analyzed_ = false;
+  TwoLevelPreconditioner twoLevel_;
+  const Points* rest_ = nullptr;
+  const Points* current_ = nullptr;
+  const std::vector<int>* freeNodes_ = nullptr;
 };
 
 /// Per-tet state of the fixed-corotated energy at a pose: Irving's signed SVD F = U diag(sigma) V^T
@@ -461,6 +494,10 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     throw std::invalid_argument("relaxCorotational: tolerance must be positive");
   if (options.maxCgIterations < 1)
     throw std::invalid_argument("relaxCorotational: maxCgIterations must be >= 1");
+  if (options.coarseAggregateSize < 1)
+    throw std::invalid_argument("relaxCorotational: coarseAggregateSize must be >= 1");
+  if (!(options.twoLevelBelowTolerance >= 0.0))
+    throw std::invalid_argument("relaxCorotational: twoLevelBelowTolerance must be >= 0");
   if (options.maxNewtonIterations < 1)
     throw std::invalid_argument("relaxCorotational: maxNewtonIterations must be >= 1");
   if (!(options.stepTolerance > 0.0))
@@ -593,6 +630,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   const double mu = E / (2.0 * (1.0 + nu));
 
   SpdSolver solver(options);
+  solver.setNodes(rest, posed, freeNodes);
   if (options.model == CorotationalOptions::FixedCorotated) {
     relaxFixedCorotated(rest, tets, posed, options, rep, restTets, fixedBone, dof, freeNodes, incStart, incTet, A, solver,
                         lambda, mu);

@@ -24,10 +24,22 @@ struct CorotationalOptions {
   /// ordering): fewer iterations, but the factorization and triangular solves cost more.
   /// Cholmod: no CG, a CHOLMOD supernodal Cholesky factorization (symbolic analysis once per
   /// call, numeric factorization per outer / Newton iteration) and a direct solve.
-  /// BlockJacobi (default): our CG on the matrix stored as float 3x3 blocks (a third of the memory
-  /// traffic), preconditioned by the inverses of the diagonal blocks, threaded.
-  enum Preconditioner { Jacobi, IncompleteCholesky, Cholmod, BlockJacobi };
-  Preconditioner preconditioner = BlockJacobi;
+  /// BlockJacobi: our CG on the matrix stored as float 3x3 blocks (a third of the memory traffic),
+  /// preconditioned by the inverses of the diagonal blocks, threaded.
+  /// TwoLevel (default): the same block CG with a two-level preconditioner, block Jacobi plus a coarse
+  /// correction by the rigid-body modes of aggregates of about coarseAggregateSize nodes
+  /// (see two_level_preconditioner.h).
+  enum Preconditioner { Jacobi, IncompleteCholesky, Cholmod, BlockJacobi, TwoLevel };
+  Preconditioner preconditioner = TwoLevel;
+  /// TwoLevel: target nodes per aggregate. Larger: a smaller coarse matrix, more CG iterations.
+  int coarseAggregateSize = 200;
+  /// TwoLevel: solves with a looser relative tolerance than this (FixedCorotated's first Newton
+  /// iterations, whose forcing term is at its cap of 0.1) use block Jacobi alone. Far from the
+  /// minimum a truncated block-Jacobi CG moves the nodes locally, which the line search needs: a
+  /// coarse-corrected step follows the projected Hessian's flat global modes, and Newton then takes
+  /// more iterations (small phantom: 14 instead of 9). Once the tolerance tightens, the coarse space
+  /// saves most of the CG iterations.
+  double twoLevelBelowTolerance = 0.06;
 
   /// Linear: linearized corotational elasticity (Mueller & Gross), outerIterations solves; its
   /// volume is only kept to first order (sum of the principal stretches, not their product).
@@ -95,7 +107,7 @@ struct CorotationalReport {
 /// cgIterations / relativeResidual are then per Newton iteration); the number of inverted tets never
 /// increases, and inverted skinned tets are pushed back since the energy is finite and smooth
 /// through det F = 0. Young's modulus scales the energy only: the minimizer does not depend on it.
-/// Throws std::runtime_error if the incomplete Cholesky or CHOLMOD factorization fails.
+/// Throws std::runtime_error if the incomplete Cholesky, CHOLMOD or two-level coarse factorization fails.
 void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
                        Points& posed, const CorotationalOptions& options,
                        CorotationalReport* report = nullptr);
