@@ -327,10 +327,14 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         S(0, 1) += pressure * s(2), S(1, 0) += pressure * s(2);
         S(1, 2) += pressure * s(0), S(2, 1) += pressure * s(0);
         S(0, 2) += pressure * s(1), S(2, 0) += pressure * s(1);
-        Eigen::SelfAdjointEigenSolver<Mat3> eig;
-        eig.computeDirect(S);
-        const Mat3 clamped =
-            eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+        // Most tets are mildly deformed and S is positive definite (leading principal minors > 0):
+        // then it is its own projection, and the eigensolve (the costliest step here) is skipped.
+        Mat3 clamped = S;
+        if (!(S(0, 0) > 0 && S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0) > 0 && S.determinant() > 0)) {
+          Eigen::SelfAdjointEigenSolver<Mat3> eig;
+          eig.computeDirect(S);
+          clamped = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+        }
         for (int r = 0; r < 3; ++r)
           for (int c = 0; c < 3; ++c) h.S[r][c] = float(clamped(r, c));
       }
@@ -432,6 +436,9 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       for (int halving = 0; halving < 40 && alpha * maxMove > 1e-3 * stepLimit; ++halving, alpha *= 0.5) {
         for (std::size_t i = 0; i < nFree; ++i)
           trial.row(freeNodes[i]) = posed.row(freeNodes[i]) + alpha * step.segment<3>(Eigen::Index(3 * i)).transpose();
+        // A step that inverts more tets is refused on the signs of the tet volumes alone, without
+        // the per-tet SVDs of the energy (most of the line search's cut-backs are such steps).
+        if (countInverted(trial, tets) > inverted) continue;
         int trialInverted = 0;
         const double trialEnergy = evaluate(trial, trialInverted);
         if (trialInverted <= inverted && trialEnergy <= energy + 1e-4 * alpha * std::min(slope, 0.0)) {
