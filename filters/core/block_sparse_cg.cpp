@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace repose {
 
@@ -51,17 +52,42 @@ std::vector<Eigen::Matrix3d> blockDiagonalInverses(const BlockSparseMatrix3f& A)
   return inverse;
 }
 
+namespace {
+
+// |b|, after checking the sizes; a zero right-hand side has the solution x = 0 (set here).
+double rightHandSideNorm(const char* solver, const BlockSparseMatrix3f& A, const Eigen::VectorXd& b,
+                         Eigen::VectorXd& x) {
+  if (b.size() != 3 * Eigen::Index(A.rows()) || x.size() != b.size())
+    throw std::invalid_argument(std::string(solver) + ": vector sizes do not match the matrix");
+  const double bNorm = b.norm();
+  if (!(bNorm > 0.0)) x.setZero();
+  return bNorm;
+}
+
+// The next search direction p = z + (rzNew / rz) p, and rz = rzNew.
+void nextDirection(double rzNew, double& rz, const Eigen::VectorXd& z, Eigen::VectorXd& p) {
+  const double beta = rzNew / rz;
+  rz = rzNew;
+  const Eigen::Index m = p.size();
+#pragma omp parallel for schedule(static, 4096)
+  for (Eigen::Index k = 0; k < m; ++k) p[k] = z[k] + beta * p[k];
+}
+
+BlockCgResult finished(int iterations, double rNorm, double bNorm) {
+  BlockCgResult result;
+  result.iterations = iterations;
+  result.relativeResidual = rNorm / bNorm;
+  return result;
+}
+
+}  // namespace
+
 BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                             double tolerance, int maxIterations) {
   const int n = A.rows();
-  if (b.size() != 3 * Eigen::Index(n) || x.size() != b.size())
-    throw std::invalid_argument("blockJacobiCg: vector sizes do not match the matrix");
   BlockCgResult result;
-  const double bNorm = b.norm();
-  if (!(bNorm > 0.0)) {
-    x.setZero();
-    return result;
-  }
+  const double bNorm = rightHandSideNorm("blockJacobiCg", A, b, x);
+  if (!(bNorm > 0.0)) return result;
   const std::vector<Eigen::Matrix3d> inverse = blockDiagonalInverses(A);
   // The vector updates are fused into two threaded passes per iteration (besides the product): on
   // two cores CG is bound by memory traffic, and serial vector operations would leave a core idle.
@@ -105,27 +131,16 @@ BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd&
     ++it;
     rNorm = std::sqrt(rrNew);
     if (rNorm <= threshold) break;
-    const double beta = rzNew / rz;
-    rz = rzNew;
-#pragma omp parallel for schedule(static, 4096)
-    for (Eigen::Index k = 0; k < m; ++k) p[k] = z[k] + beta * p[k];
+    nextDirection(rzNew, rz, z, p);
   }
-  result.iterations = it;
-  result.relativeResidual = rNorm / bNorm;
-  return result;
+  return finished(it, rNorm, bNorm);
 }
 
 BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                                     double tolerance, int maxIterations, const BlockPreconditioner& M) {
-  const int n = A.rows();
-  if (b.size() != 3 * Eigen::Index(n) || x.size() != b.size())
-    throw std::invalid_argument("preconditionedBlockCg: vector sizes do not match the matrix");
   BlockCgResult result;
-  const double bNorm = b.norm();
-  if (!(bNorm > 0.0)) {
-    x.setZero();
-    return result;
-  }
+  const double bNorm = rightHandSideNorm("preconditionedBlockCg", A, b, x);
+  if (!(bNorm > 0.0)) return result;
   const Eigen::Index m = b.size();
   Eigen::VectorXd r(m), z(m), p(m), q(m);
   A.multiply(x, q);
@@ -161,14 +176,9 @@ BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::V
     rNorm = std::sqrt(rrNew);
     if (rNorm <= threshold) break;
     const double rzNew = M.apply(r, z);
-    const double beta = rzNew / rz;
-    rz = rzNew;
-#pragma omp parallel for schedule(static, 4096)
-    for (Eigen::Index k = 0; k < m; ++k) p[k] = z[k] + beta * p[k];
+    nextDirection(rzNew, rz, z, p);
   }
-  result.iterations = it;
-  result.relativeResidual = rNorm / bNorm;
-  return result;
+  return finished(it, rNorm, bNorm);
 }
 
 }  // namespace repose
