@@ -337,37 +337,81 @@ TEST(Phantom, SizesDescribeTheSameBodyWithMoreVoxels) {
   EXPECT_TRUE(t.labels.grid.sameGridAs(tiny().labels.grid));
 }
 
-// The hips flex without bone running into bone: each femur, turned about its hip centre through
-// extension 20 to flexion 120 degrees (also between the sampled angles), stays clear of the pelvis.
-TEST(Phantom, FemursClearThePelvisThroughHipFlexion) {
+// Voxel centres of one label.
+std::vector<Eigen::Vector3d> voxelsOf(const Phantom& ph, int label) {
+  const ImageGrid& g = ph.labels.grid;
+  std::vector<Eigen::Vector3d> out;
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i)
+        if (ph.labels.at(i, j, k) == label) out.push_back(g.indexToPhysical(Eigen::Vector3d(i, j, k)));
+  return out;
+}
+
+// Smallest distance between the fixed bone's voxels and the moving bone's voxels turned about
+// `centre` by each rotation (moving voxels farther than `reach` from the centre are skipped).
+double clearance(const std::vector<Eigen::Vector3d>& fixed, const std::vector<Eigen::Vector3d>& moving,
+                 const Eigen::Vector3d& centre, const std::vector<Eigen::Matrix3d>& rotations, double reach) {
+  // Turning keeps the distance to the centre: only fixed voxels at about the same radius can be
+  // nearest, so they are sorted by radius and scanned within the current best distance.
+  std::vector<std::pair<double, Eigen::Vector3d>> byRadius;
+  for (const Eigen::Vector3d& f : fixed) byRadius.push_back({(f - centre).norm(), f});
+  std::sort(byRadius.begin(), byRadius.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  double worst = 1e30;
+  for (const Eigen::Vector3d& m : moving) {
+    const double r = (m - centre).norm();
+    if (r > reach) continue;
+    for (const Eigen::Matrix3d& R : rotations) {
+      const Eigen::Vector3d q = centre + R * (m - centre);
+      auto it = std::lower_bound(byRadius.begin(), byRadius.end(), r - worst,
+                                 [](const auto& e, double v) { return e.first < v; });
+      for (; it != byRadius.end() && it->first <= r + worst; ++it) worst = std::min(worst, (q - it->second).norm());
+    }
+  }
+  return worst;
+}
+
+Eigen::Matrix3d rotation(double degrees, const Eigen::Vector3d& axis) {
+  return Eigen::AngleAxisd(degrees * 3.14159265358979 / 180, axis).toRotationMatrix();
+}
+
+// The joints move through their range without bone running into bone (no deformation of the tissue
+// between two colliding bones could stay un-inverted), sampled more finely than the phantom carves:
+// - each femur, turned about its hip centre through flexion 120 to extension 20 degrees (about -x),
+//   abduction and adduction 45 (about y) and rotation 40 either way (about z), stays clear of the pelvis;
+// - each tibia, flexed about its knee to 130 degrees (about +x), stays clear of the femur;
+// - each forearm, flexed about its elbow to 145 degrees (about -x), stays clear of the humerus.
+TEST(Phantom, BonesClearEachOtherThroughTheirJointsRange) {
   for (PhantomSize size : {PhantomSize::Tiny, PhantomSize::Small}) {
     const Phantom ph = makePhantom(size);
-    const ImageGrid& g = ph.labels.grid;
-    std::vector<Eigen::Vector3d> pelvis, femur[2];
-    for (int k = 0; k < g.dims[2]; ++k)
-      for (int j = 0; j < g.dims[1]; ++j)
-        for (int i = 0; i < g.dims[0]; ++i) {
-          const int l = ph.labels.at(i, j, k);
-          const Eigen::Vector3d x = g.indexToPhysical(Eigen::Vector3d(i, j, k));
-          if (l == pl::Pelvis) pelvis.push_back(x);
-          if (l == pl::FemurLeft) femur[0].push_back(x);
-          if (l == pl::FemurRight) femur[1].push_back(x);
-        }
-    const double voxel = g.spacing.minCoeff();
-    for (int side = 0; side < 2; ++side) {
-      const Joint& hip = ph.skeleton.joints[std::size_t(jointIndex(ph.skeleton, side == 0 ? "left_hip" : "right_hip"))];
-      double worst = 1e30;
-      for (double deg = -120; deg <= 20; deg += 5) {  // flexion is a rotation about -x
-        const Eigen::Matrix3d R = Eigen::AngleAxisd(deg * 3.14159265358979 / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
-        for (const Eigen::Vector3d& f : femur[side]) {
-          const Eigen::Vector3d q = hip.center + R * (f - hip.center);
-          if ((q - hip.center).norm() > 150) continue;  // only the proximal femur can reach the pelvis
-          for (const Eigen::Vector3d& p : pelvis) worst = std::min(worst, (q - p).norm());
-        }
-      }
-      EXPECT_GT(worst, voxel) << "side " << side << ", size " << int(size);
-      std::printf("size %d side %d: nearest pelvis voxel to the turning femur %.1f mm (voxel %.1f)\n", int(size), side,
-                  worst, voxel);
+    const double voxel = ph.labels.grid.spacing.minCoeff();
+    const std::vector<Eigen::Vector3d> pelvis = voxelsOf(ph, pl::Pelvis);
+    for (const std::string side : {"left", "right"}) {
+      const bool left = side == "left";
+      auto centre = [&](const std::string& joint) {
+        return ph.skeleton.joints[std::size_t(jointIndex(ph.skeleton, side + "_" + joint))].center;
+      };
+      const std::vector<Eigen::Vector3d> femur = voxelsOf(ph, left ? pl::FemurLeft : pl::FemurRight);
+      std::vector<Eigen::Matrix3d> hipRange;
+      for (double rot = -40; rot <= 40; rot += 20)
+        for (double abd = -45; abd <= 45; abd += 15)
+          for (double flex = -120; flex <= 20; flex += 5)
+            hipRange.push_back(rotation(rot, Eigen::Vector3d::UnitZ()) * rotation(abd, Eigen::Vector3d::UnitY()) *
+                               rotation(flex, Eigen::Vector3d::UnitX()));
+      const double hip = clearance(pelvis, femur, centre("hip"), hipRange, 150);
+      std::vector<Eigen::Matrix3d> knee, elbow;
+      for (double flex = 0; flex <= 130; flex += 5) knee.push_back(rotation(flex, Eigen::Vector3d::UnitX()));
+      for (double flex = 0; flex <= 145; flex += 5) elbow.push_back(rotation(-flex, Eigen::Vector3d::UnitX()));
+      const double kneeClear =
+          clearance(femur, voxelsOf(ph, left ? pl::TibiaLeft : pl::TibiaRight), centre("knee"), knee, 120);
+      const double elbowClear = clearance(voxelsOf(ph, left ? pl::HumerusLeft : pl::HumerusRight),
+                                          voxelsOf(ph, left ? pl::ForearmLeft : pl::ForearmRight), centre("elbow"),
+                                          elbow, 120);
+      std::printf("size %d %s: nearest bone voxels through the range: hip %.1f mm, knee %.1f, elbow %.1f (voxel %.1f)\n",
+                  int(size), side.c_str(), hip, kneeClear, elbowClear, voxel);
+      EXPECT_GT(hip, voxel) << side << ", size " << int(size);
+      EXPECT_GT(kneeClear, 0.5 * voxel) << side << ", size " << int(size);
+      EXPECT_GT(elbowClear, 0.5 * voxel) << side << ", size " << int(size);
     }
   }
 }

@@ -15,8 +15,9 @@ struct AutoRigOptions {
   /// Two bones are adjacent when their surfaces are at most this far apart (mm) ...
   double maxGapMm = 6.0;
   /// ... or at most this many voxels (of the largest spacing), whichever is larger: a coarse image
-  /// cannot show a joint space narrower than a couple of voxels.
-  double maxGapVoxels = 2.0;
+  /// cannot show a joint space narrower than a couple of voxels, and a hinge whose bones taper
+  /// toward the joint (as the phantom's knees and elbows do) shows a wider one.
+  double maxGapVoxels = 3.0;
   /// Connected components smaller than noiseFraction x (the label's largest component), or than
   /// minComponentVoxels, are segmentation noise: ignored (left in the volume, in no bone).
   double noiseFraction = 0.01;

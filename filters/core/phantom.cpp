@@ -154,10 +154,34 @@ struct Carver {
   std::vector<Eigen::Matrix3d> poses{Eigen::Matrix3d::Identity()};
 };
 
+/// A hinge joint's limit on a bone near it: within `reach` of the hinge axis (through `centre`
+/// along `axis`), the bone keeps only the points at least `tip` from the axis whose direction from
+/// it is within `halfAngle` of `direction`. Two bones so shaped, each in a wedge about the axis,
+/// clear each other for any flexion below 180 degrees less both half angles (by at least
+/// 2 tip cos(flexion / 2) near the axis): the phantom's stand-in for the rolling condyles of a real
+/// knee or elbow, which never meet the opposite bone in flexion.
+struct Wedge {
+  V3 centre = V3::Zero(), axis = V3::UnitX(), direction = V3::UnitZ();
+  double halfAngle = 0, reach = 0, tip = 0;
+  bool keeps(const V3& p) const {
+    V3 d = p - centre;
+    d -= d.dot(axis) * axis;
+    const double r = d.norm();
+    if (r >= reach) return true;
+    return r >= tip && std::acos(std::clamp(d.dot(direction) / r, -1.0, 1.0)) <= halfAngle;
+  }
+};
+
 struct Bone {
   int label = 0;
   Shape shape;
   std::vector<Carver> carvers;
+  std::vector<Wedge> wedges;
+  bool inWedges(const V3& p) const {
+    for (const Wedge& w : wedges)
+      if (!w.keeps(p)) return false;
+    return true;
+  }
 };
 
 /// Relative rotations of a joint about x (flexion / extension) from x0 to x1 degrees, every `step`.
@@ -166,6 +190,20 @@ std::vector<Eigen::Matrix3d> flexionRange(double x0, double x1, double step = 10
   const double d2r = 3.14159265358979323846 / 180;
   for (double x = x0; x <= x1 + 1e-9; x += step)
     out.push_back(Eigen::AngleAxisd(x * d2r, V3::UnitX()).toRotationMatrix());
+  return out;
+}
+
+/// Relative rotations of a ball joint: Rz(rotation) Ry(abduction) Rx(flexion) over the given
+/// ranges (degrees), every `step`.
+std::vector<Eigen::Matrix3d> ballRange(double x0, double x1, double y0, double y1, double z0, double z1,
+                                       double step = 10) {
+  std::vector<Eigen::Matrix3d> out{Eigen::Matrix3d::Identity()};
+  const double d2r = 3.14159265358979323846 / 180;
+  for (double z = z0; z <= z1 + 1e-9; z += step)
+    for (double y = y0; y <= y1 + 1e-9; y += step)
+      for (double x = x0; x <= x1 + 1e-9; x += step)
+        out.push_back((Eigen::AngleAxisd(z * d2r, V3::UnitZ()) * Eigen::AngleAxisd(y * d2r, V3::UnitY()) *
+                       Eigen::AngleAxisd(x * d2r, V3::UnitX())).toRotationMatrix());
   return out;
 }
 
@@ -195,6 +233,11 @@ V3 spacingOf(PhantomSize size) {
   }
   throw std::invalid_argument("unknown phantom size");
 }
+
+// Half angles of the hinge wedges (see Wedge): knees clear each other to 180 - 2 * 20 = 140 degrees
+// of flexion, elbows to 150.
+constexpr double kKneeWedge = 20 * 3.14159265358979323846 / 180;
+constexpr double kElbowWedge = 15 * 3.14159265358979323846 / 180;
 
 // All lengths in mm. Body frame: x = patient left, y = posterior, z = up from the soles; the
 // physical frame is shifted down by kSole so the origin is not zero.
@@ -275,10 +318,11 @@ Model buildModel(PhantomSize size) {
       const V3 u = V3(-side * 0.75, -0.65, 0).normalized();
       b.shape.add(capsule(hip + (headR + g + 16) * u, P(0, -48, 905), 11));
     }
-    // Hip range: flexion 120 degrees (rotation about -x), extension 20.
+    // Hip range: flexion 125 degrees (rotation about -x) to extension 30, abduction and adduction
+    // 45 (about y), rotation 40 either way (about z), and their combinations.
     for (double side : {1.0, -1.0})
       rules.push_back({Pelvis, side > 0 ? FemurLeft : FemurRight, P(side * (legX + 4), 5, 920),
-                       flexionRange(-120, 20), true});
+                       ballRange(-125, 30, -45, 45, -40, 40), true});
     rules.push_back({Pelvis, Spine});
   }
   {
@@ -331,12 +375,14 @@ Model buildModel(PhantomSize size) {
       b.shape.add(capsule(hip, troch, 12));
       b.shape.add(capsule(troch, condyle, 14));
       b.shape.add(ellipsoid(condyle, V3(28, 24, 16)));
+      b.wedges.push_back({knee, V3::UnitX(), V3::UnitZ(), kKneeWedge, 60, g / 2});
     }
     {
       Bone& b = bone(tibia);
       const V3 plateau = knee - V3(0, 0, g / 2 + 14);
       b.shape.add(ellipsoid(plateau, V3(30, 26, 14)));
       b.shape.add(capsule(plateau, ankle + V3(0, 0, g / 2 + 13), 13));
+      b.wedges.push_back({knee, V3::UnitX(), -V3::UnitZ(), kKneeWedge, 60, g / 2});
       rules.push_back({tibia, femur});
     }
     {
@@ -364,10 +410,12 @@ Model buildModel(PhantomSize size) {
       b.shape.add(sphere(shoulder, headR));
       b.shape.add(capsule(shoulder, condyle, 12));
       b.shape.add(ellipsoid(condyle, V3(26, 15, 12)));
+      b.wedges.push_back({elbow, V3::UnitX(), V3::UnitZ(), kElbowWedge, 50, g / 2});
     }
     {
       Bone& b = bone(forearm);
       b.shape.add(capsule(elbow - V3(0, 0, g / 2 + 13), wrist + V3(0, 0, g / 2 + 13), 13));
+      b.wedges.push_back({elbow, V3::UnitX(), -V3::UnitZ(), kElbowWedge, 50, g / 2});
       rules.push_back({forearm, humerus});
     }
     {
@@ -529,13 +577,14 @@ Phantom makePhantom(PhantomSize size) {
           int label = 0;
           for (int b : bones) {
             const Bone& bone = m.bones[b];
-            if (!bone.shape.inBox(p) || bone.shape.sdf(p) > 0) continue;
+            if (!bone.shape.inBox(p) || bone.shape.sdf(p) > 0 || !bone.inWedges(p)) continue;
             bool carved = false;
             for (const Carver& c : bone.carvers) {
-              const Shape& cs = m.bones[std::size_t(c.bone)].shape;
+              const Bone& carver = m.bones[std::size_t(c.bone)];
+              const Shape& cs = carver.shape;
               for (const Eigen::Matrix3d& M : c.poses) {
                 const V3 q = c.centre + M * (p - c.centre);
-                if (cs.inBox(q, gap) && cs.distanceBound(q) <= gap) { carved = true; break; }
+                if (cs.inBox(q, gap) && cs.distanceBound(q) <= gap && carver.inWedges(q)) { carved = true; break; }
               }
               if (carved) break;
             }
