@@ -183,7 +183,9 @@ const char* kPoseUsage =
     "  --relax                 refine the skinned pose by a static corotational FEM solve (bones stay rigid,\n"
     "                          soft tissue keeps its volume); --poisson NU (0.49); --relax-model fixed-corotated\n"
     "                          (default: nonlinear, Newton with a line search that never adds inverted tets) or\n"
-    "                          linear (faster, volume kept to first order; --relax-iterations N outer iterations)\n"
+    "                          linear (faster, volume kept to first order; --relax-iterations N outer iterations);\n"
+    "                          --relax-volume segments (default: each body segment also keeps its volume as a\n"
+    "                          whole, against the volumetric locking of linear tets), body or none (the paper's)\n"
     "  --compare M,M,...       fidelity.csv and fidelity.png: body and per-label volume ratios, inverted tets and\n"
     "                          |det F - 1| for each of lbs, dqs, lbs+fem, dqs+fem\n";
 
@@ -431,9 +433,13 @@ struct FidelityReport {
 void requireDisplay(int argc, char** argv, const char* why);
 
 void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
+  const std::string volume = o.get("relax-volume", "segments");
+  if (volume != "segments" && volume != "body" && volume != "none")
+    throw UsageError("--relax-volume must be segments, body or none");
+  pipeline.setRelaxationVolume(volume);  // also for the +fem methods of --compare
   if (!o.has("relax")) {
-    if (o.has("relax-iterations") || o.has("poisson") || o.has("relax-model"))
-      throw UsageError("--relax-model, --relax-iterations and --poisson need --relax");
+    if (o.has("relax-iterations") || o.has("poisson") || o.has("relax-model") || (o.has("relax-volume") && !o.has("compare")))
+      throw UsageError("--relax-model, --relax-iterations, --relax-volume and --poisson need --relax");
     return;
   }
   const std::string model = o.get("relax-model", "fixed-corotated");
@@ -820,7 +826,7 @@ int main(int argc, char** argv) {
                                 none));
     if (command == "pose")
       return runPose(Options(argc, argv, 2,
-                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model", "poisson",
+                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model", "relax-volume", "poisson",
                               "compare", "mesh"},
                              {"relax"}),
                      argc, argv);
@@ -835,7 +841,7 @@ int main(int argc, char** argv) {
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image", "relax-iterations", "relax-model", "poisson", "compare", "mesh"},
+                                 "unit-mm", "image", "relax-iterations", "relax-model", "relax-volume", "poisson", "compare", "mesh"},
                                 {"volumes", "no-root-motion", "relax"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");

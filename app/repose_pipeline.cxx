@@ -532,6 +532,7 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
     relax_->SetPoissonRatio(poisson);
     relax_->SetOuterIterations(outerIterations);
     relax_->SetModel(relaxModel_);
+    relax_->SetVolumeRegions(relaxVolume_);
   } else {
     relax_ = nullptr;
   }
@@ -549,6 +550,18 @@ void Pipeline::setRelaxationModel(const std::string& model) {
   else
     throw std::runtime_error("unknown relaxation model '" + model + "' (expected fixed-corotated or linear)");
   if (relax_) relax_->SetModel(relaxModel_);
+}
+
+void Pipeline::setRelaxationVolume(const std::string& regions) {
+  if (regions == "none")
+    relaxVolume_ = 0;
+  else if (regions == "body")
+    relaxVolume_ = 1;
+  else if (regions == "segments")
+    relaxVolume_ = 2;
+  else
+    throw std::runtime_error("unknown relaxation volume regions '" + regions + "' (expected segments, body or none)");
+  if (relax_) relax_->SetVolumeRegions(relaxVolume_);
 }
 
 std::string Pipeline::relaxationSummary() const {

@@ -95,6 +95,9 @@ public:
   /// "fixed-corotated" (default: nonlinear, keeps volume, untangles inverted tets) or "linear"
   /// (one linearised corotational solve per outer iteration: faster, volume kept to first order).
   void setRelaxationModel(const std::string& model);
+  /// Regions whose volume the fixed-corotated relaxation holds as a whole: "segments" (default, one
+  /// per bone's segment of the body), "body" or "none" (see vtkReposeCorotationalRelax::VolumeRegions).
+  void setRelaxationVolume(const std::string& regions);
   /// One line on the last relaxation: CG iterations, residual, inverted tets before and after.
   std::string relaxationSummary() const;
   /// Optional intensity image on the rest label grid, posed with trilinear sampling.
@@ -139,6 +142,7 @@ private:
   vtkSmartPointer<vtkReposeSkinning> skinning_;
   vtkSmartPointer<vtkReposeCorotationalRelax> relax_;  // null when relaxation is off
   int relaxModel_ = 1;                                   // vtkReposeCorotationalRelax::Model
+  int relaxVolume_ = 2;                                  // vtkReposeCorotationalRelax::VolumeRegions
   vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;

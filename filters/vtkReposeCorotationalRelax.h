@@ -44,6 +44,15 @@ public:
   /// Model 1: also stops when an iteration lowers the energy by less than this fraction (default 1e-3).
   vtkSetClampMacro(EnergyTolerance, double, 0.0, 1.0);
   vtkGetMacro(EnergyTolerance, double);
+  /// Model 1: regions whose volume is held as a whole (see repose::CorotationalOptions::volumeRegions),
+  /// against the volumetric locking of linear tets. 0: none (the paper's solve); 1: the whole body;
+  /// 2 (default): body segments, each tet in the segment of the bone with the largest summed weight
+  /// over its nodes (needs the rest mesh's Weights and BoneIds; falls back to 1 without them).
+  vtkSetClampMacro(VolumeRegions, int, 0, 2);
+  vtkGetMacro(VolumeRegions, int);
+  /// Model 1: a region's volume stiffness, in units of the tissue's Lame lambda.
+  vtkSetClampMacro(RegionVolumeStiffness, double, 0.0, 1e6);
+  vtkGetMacro(RegionVolumeStiffness, double);
 
   void SetRestMeshConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
   void SetRestMeshData(vtkDataObject* mesh) { this->SetInputData(1, mesh); }
@@ -79,6 +88,8 @@ protected:
   int MaxNewtonIterations = 60;
   double StepTolerance = 0.01;
   double EnergyTolerance = 1e-3;
+  int VolumeRegions = 2;
+  double RegionVolumeStiffness = 3.0;
   int CGIterations = 0;
   int NewtonIterations = 0;
   double RelativeResidual = 0;

@@ -3,8 +3,8 @@
 and peak memory of the corotational relaxation on the built-in phantoms, per linear solver.
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark_fem.py
-       [--sizes small,medium] [--solvers block,twolevel,jacobi,ic,cholmod] [--models fixed,linear] [--repose build/bin/repose]
-       [--work DIR] [--angle DEG]
+       [--sizes small,medium] [--solvers block,twolevel,jacobi,ic,cholmod] [--models fixed,linear]
+       [--volumes segments,body,none] [--repose build/bin/repose] [--work DIR] [--angle DEG]
 Each (size, model, solver) runs in its own process so that its peak resident memory is its own; the
 "skin only" row is the same process without the relaxation (the memory the FEM adds is the difference).
 Prints a Markdown table."""
@@ -25,6 +25,7 @@ sys.path.append(_package)
 os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (os.environ.get("PYTHONPATH"), _package) if p)
 SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2, "block": 3, "twolevel": 4}
 MODELS = {"linear": 0, "fixed": 1}
+VOLUMES = {"none": 0, "body": 1, "segments": 2}
 
 
 def pose_json(angle):
@@ -36,7 +37,7 @@ def pose_json(angle):
         "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}})
 
 
-def child(case, model, solver, angle):
+def child(case, model, solver, angle, volume):
     """Skins the case to the pose, then relaxes it (model/solver < 0: skinning only); prints one JSON line."""
     from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
     from repose import vtkReposeCorotationalRelax, vtkReposeSkinning
@@ -59,6 +60,7 @@ def child(case, model, solver, angle):
         fem.SetInputData(1, rest)
         fem.SetModel(model)
         fem.SetPreconditioner(solver)
+        fem.SetVolumeRegions(volume)
         fem.SetMaxIterations(20000)
         t = time.perf_counter()
         fem.Update()
@@ -78,8 +80,9 @@ def child(case, model, solver, angle):
     print("@@" + json.dumps(result))
 
 
-def run_child(case, model, solver, angle):
-    p = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", case, str(model), str(solver), str(angle)],
+def run_child(case, model, solver, angle, volume=2):
+    p = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", case, str(model), str(solver), str(angle),
+                        str(volume)],
                        capture_output=True, text=True)
     m = re.search(r"^@@(.*)$", p.stdout, re.M)
     if p.returncode != 0 or not m:
@@ -89,12 +92,13 @@ def run_child(case, model, solver, angle):
 
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
-        child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]))
+        child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), int(sys.argv[6]))
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
     ap.add_argument("--solvers", default="twolevel,block")
     ap.add_argument("--models", default="fixed")
+    ap.add_argument("--volumes", default="segments", help="region volume terms of the fixed-corotated model")
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")
     ap.add_argument("--angle", type=float, default=45.0, help="hip/knee/shoulder/elbow angle of the pose (degrees)")
@@ -114,23 +118,24 @@ def main():
         base, err = run_child(case, -1, -1, args.angle)
         if base is None:
             sys.exit(f"{size}: skinning failed: {err}")
-        rows.append((size, "skin only", "", base, ""))
+        rows.append((size, "skin only", "", "", base, ""))
         for model in args.models.split(","):
-            for solver in args.solvers.split(","):
-                r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle)
-                rows.append((size, model, solver, r or base, err))
-                print(f"{size} {model} {solver}: {'done' if r else err}", file=sys.stderr)
-    print("| size | nodes | tets | model | solver | FEM s / pose | assembly s | solves s | untangle s | Newton its |"
-          " CG its | inverted before -> after (only bone nodes) | volume ratio | peak MiB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for size, model, solver, r, err in rows:
+            for volume in args.volumes.split(",") if model == "fixed" else ["none"]:
+                for solver in args.solvers.split(","):
+                    r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume])
+                    rows.append((size, model, volume, solver, r or base, err))
+                    print(f"{size} {model} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
+    print("| size | nodes | tets | model | regions | solver | FEM s / pose | assembly s | solves s | untangle s |"
+          " Newton its | CG its | inverted before -> after (only bone nodes) | volume ratio | peak MiB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for size, model, volume, solver, r, err in rows:
         if err:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | failed: {err} | | | | | | | | |")
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | failed: {err} | | | | | | | | |")
         elif "seconds" not in r:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | | | | {r['volume_ratio']:.4f} |"
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | | | | | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")
         else:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {solver} | {r['seconds']:.2f} |"
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | {r['seconds']:.2f} |"
                   f" {r['assembly']:.2f} | {r['solve']:.2f} | {r['untangle']:.2f} | {r['newton']} |"
                   f" {r['cg']} | {r['before']} -> {r['after']} ({r['rigid']}) | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")

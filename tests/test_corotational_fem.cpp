@@ -350,6 +350,73 @@ TEST(FixedCorotatedFem, NearlyIncompressibleSqueezedBlockKeepsVolume) {
   EXPECT_NEAR(repose::meshVolume(x, b.tets) / v0, 0.9, 0.01);
 }
 
+// A block indented by a stamp on part of its top: linear tets at nu = 0.45 lose volume under the
+// stamp. A volume term per region (two halves of the block) holds each half's volume as a whole,
+// and the minimum does not depend on the solver (CHOLMOD's Newton matrix omits the term's low-rank
+// part, so its iterates differ; the two-level CG includes it).
+TEST(FixedCorotatedFem, RegionVolumeTermsKeepEachRegionsVolume) {
+  const Box b = makeBox(8, 4, 4, 1.0);
+  std::vector<int> fixed(b.nodes.rows(), -1);
+  Points stamped = b.nodes;
+  for (int j = 0; j < b.ny; ++j)
+    for (int i = 0; i < b.nx; ++i) {
+      fixed[b.id(i, j, 0)] = 0;
+      if (i >= 2 && i <= 5) {
+        fixed[b.id(i, j, b.nz - 1)] = 1;
+        stamped(b.id(i, j, b.nz - 1), 2) -= 0.6;
+      }
+    }
+  std::vector<int> half(std::size_t(b.tets.rows()));
+  std::vector<double> restVolume(2, 0.0);
+  for (Eigen::Index t = 0; t < b.tets.rows(); ++t) {
+    double cx = 0;
+    for (int a = 0; a < 4; ++a) cx += 0.25 * b.nodes(b.tets(t, a), 0);
+    half[std::size_t(t)] = cx < 4.0 ? 0 : 1;
+    restVolume[std::size_t(half[std::size_t(t)])] += repose::tetVolume(
+        b.nodes.row(b.tets(t, 0)).transpose(), b.nodes.row(b.tets(t, 1)).transpose(),
+        b.nodes.row(b.tets(t, 2)).transpose(), b.nodes.row(b.tets(t, 3)).transpose());
+  }
+  auto halfRatios = [&](const Points& x) {
+    std::vector<double> v(2, 0.0);
+    for (Eigen::Index t = 0; t < b.tets.rows(); ++t)
+      v[std::size_t(half[std::size_t(t)])] += repose::tetVolume(
+          x.row(b.tets(t, 0)).transpose(), x.row(b.tets(t, 1)).transpose(), x.row(b.tets(t, 2)).transpose(),
+          x.row(b.tets(t, 3)).transpose());
+    return std::vector<double>{v[0] / restVolume[0], v[1] / restVolume[1]};
+  };
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::TwoLevel);
+  opt.poisson = 0.45;
+  opt.coarseAggregateSize = 20;
+  Points plain = stamped;
+  repose::relaxCorotational(b.nodes, b.tets, fixed, plain, opt);
+  const std::vector<double> without = halfRatios(plain);
+  opt.volumeRegions = half;
+  opt.regionVolumeStiffness = 10.0;
+  Points held[2] = {stamped, stamped};
+  for (int k = 0; k < 2; ++k) {
+    opt.preconditioner = k == 0 ? CorotationalOptions::TwoLevel : CorotationalOptions::Cholmod;
+    CorotationalReport rep;
+    repose::relaxCorotational(b.nodes, b.tets, fixed, held[k], opt, &rep);
+    EXPECT_TRUE(rep.converged) << "preconditioner " << opt.preconditioner;
+    EXPECT_EQ(rep.invertedAfter, 0);
+    const std::vector<double> with = halfRatios(held[k]);
+    ASSERT_EQ(rep.regionVolumeRatio.size(), 2u);
+    for (int r = 0; r < 2; ++r) {
+      EXPECT_NEAR(rep.regionVolumeRatio[std::size_t(r)], with[std::size_t(r)], 1e-9);
+      EXPECT_LT(std::abs(with[std::size_t(r)] - 1), 0.25 * std::abs(without[std::size_t(r)] - 1)) << "half " << r;
+    }
+    std::printf("stamped block, nu = 0.45, volume ratio of the halves: %.5f %.5f, with region terms %.5f %.5f\n",
+                without[0], without[1], with[0], with[1]);
+  }
+  EXPECT_LT(without[0], 0.99);
+  EXPECT_LT((held[0] - held[1]).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_GT((held[0] - plain).cwiseAbs().maxCoeff(), 1e-2);
+  // Bad regions: one entry per tet is needed.
+  opt.volumeRegions.pop_back();
+  Points x = stamped;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt), std::invalid_argument);
+}
+
 TEST(FixedCorotatedFem, InvertedTetsAreUntangledAndTheCountNeverGrows) {
   const Box b = makeBox(3, 3, 3, 1.0);
   std::vector<int> fixed(b.nodes.rows(), -1);
@@ -630,6 +697,67 @@ TEST(BlockSparseCg, SolvesAnSpdBlockSystemLikeADenseSolver) {
   EXPECT_THROW(repose::blockJacobiCg(A, b, wrong, 1e-6, 10), std::invalid_argument);
 }
 
+// A low-rank term sum_r w_r g_r g_r^T beside the blocks (the coupling of region volumes): part of
+// the operator that multiply() and both CGs see.
+TEST(BlockSparseCg, LowRankTermIsPartOfTheOperator) {
+  const int n = 30;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  repose::BlockSparseMatrix3f A;
+  A.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    for (int j : {i - 1, i, i + 1}) {
+      if (j < 0 || j >= n) continue;
+      A.column.push_back(j);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          const double v = i == j ? (r == c ? 3.0 : 0.0) : (r == c ? -1.0 : 0.0);
+          A.values.push_back(float(v));
+          dense(3 * i + r, 3 * j + c) = v;
+        }
+    }
+    A.rowStart.push_back(int(A.column.size()));
+  }
+  // Two terms: the first over rows 0..19, the second over rows 10..29 (rows 10..19 hold both).
+  repose::LowRankTerm3 L;
+  L.weight = {50.0, 7.0};
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(3 * n, 2);
+  L.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    for (int r = 0; r < 2; ++r) {
+      if ((r == 0 && i >= 20) || (r == 1 && i < 10)) continue;
+      L.term.push_back(r);
+      for (int c = 0; c < 3; ++c) {
+        const double v = g(rng);
+        L.vector.push_back(v);
+        G(3 * i + c, r) = v;
+      }
+    }
+    L.rowStart.push_back(int(L.term.size()));
+  }
+  dense += G * Eigen::Vector2d(50.0, 7.0).asDiagonal() * G.transpose();
+  A.lowRank = &L;
+  Eigen::VectorXd b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) b(i) = g(rng);
+  Eigen::VectorXd y;
+  A.multiply(b, y);
+  EXPECT_LT((y - dense * b).norm(), 1e-10 * (dense * b).norm());
+  const Eigen::VectorXd exact = dense.ldlt().solve(b);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n);
+  EXPECT_LE(repose::blockJacobiCg(A, b, x, 1e-11, 1000).relativeResidual, 1e-11);
+  EXPECT_LT((x - exact).norm(), 1e-8 * exact.norm());
+  struct Identity : repose::BlockPreconditioner {
+    double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override {
+      z = r;
+      return r.squaredNorm();
+    }
+  } identity;
+  x.setZero();
+  EXPECT_LE(repose::preconditionedBlockCg(A, b, x, 1e-11, 1000, identity).relativeResidual, 1e-11);
+  EXPECT_LT((x - exact).norm(), 1e-8 * exact.norm());
+}
+
 namespace {
 
 // Linear elasticity stiffness (Lame lambda, mu) of a box mesh, restricted to the nodes off its x = 0
@@ -709,6 +837,54 @@ TEST(TwoLevelPreconditioner, SolvesAnElasticitySystemLikeADenseSolver) {
 
 // The coarse space takes the smooth error that block Jacobi is slow on: far fewer iterations on a
 // long clamped bar.
+// A block-diagonal matrix plus a low-rank term: the fine level, which takes the term in by
+// Woodbury's identity, is then the exact inverse, and CG converges in one iteration.
+TEST(TwoLevelPreconditioner, LowRankTermJoinsTheFineLevelExactly) {
+  const int n = 50;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  repose::BlockSparseMatrix3f A;
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  Points positions(n, 3);
+  A.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Matrix3d B;
+    for (int k = 0; k < 9; ++k) B(k / 3, k % 3) = g(rng);
+    const Eigen::Matrix3d D = B * B.transpose() + Eigen::Matrix3d::Identity();
+    A.column.push_back(i);
+    for (int k = 0; k < 9; ++k) A.values.push_back(float(D(k / 3, k % 3)));
+    dense.block<3, 3>(3 * i, 3 * i) = D.cast<float>().cast<double>();
+    A.rowStart.push_back(i + 1);
+    positions.row(i) << i, 0.5 * i, 0;
+  }
+  repose::LowRankTerm3 L;
+  L.weight = {1e4, 30.0, 0.0};  // a stiff term, a soft one and an unused one
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(3 * n, 3);
+  L.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    for (int r = 0; r < 3; ++r) {
+      if ((r == 0 && i % 2) || (r == 1 && i < n / 3)) continue;
+      L.term.push_back(r);
+      for (int c = 0; c < 3; ++c) {
+        L.vector.push_back(g(rng));
+        G(3 * i + c, r) = L.vector.back();
+      }
+    }
+    L.rowStart.push_back(int(L.term.size()));
+  }
+  dense += G * Eigen::Vector3d(1e4, 30.0, 0.0).asDiagonal() * G.transpose();
+  A.lowRank = &L;
+  repose::TwoLevelPreconditioner M;
+  M.aggregate(A, positions, 10);
+  M.updateFine(A);
+  Eigen::VectorXd b(3 * n);
+  for (int i = 0; i < 3 * n; ++i) b(i) = g(rng);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n);
+  const repose::BlockCgResult r = repose::preconditionedBlockCg(A, b, x, 1e-9, 100, M);
+  EXPECT_LE(r.iterations, 2);
+  EXPECT_LT((x - dense.ldlt().solve(b)).norm(), 1e-7 * x.norm());
+}
+
 TEST(TwoLevelPreconditioner, NeedsFewerIterationsThanBlockJacobi) {
   const Box b = makeBox(40, 8, 8, 1.0);
   Points positions;

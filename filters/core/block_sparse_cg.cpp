@@ -27,6 +27,30 @@ void BlockSparseMatrix3f::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y)
     yp[3 * std::size_t(i) + 1] = s1;
     yp[3 * std::size_t(i) + 2] = s2;
   }
+  if (lowRank && !lowRank->empty()) lowRank->multiplyAdd(x, y);
+}
+
+void LowRankTerm3::multiplyAdd(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  const int n = int(rowStart.size()) - 1;
+  const int terms = int(weight.size());
+  if (x.size() != 3 * Eigen::Index(n) || y.size() != x.size())
+    throw std::invalid_argument("LowRankTerm3: vector sizes do not match the term");
+  std::vector<double> dot(std::size_t(terms), 0.0);
+  double* d = dot.data();
+#pragma omp parallel for schedule(static, 1024) reduction(+ : d[:terms])
+  for (int i = 0; i < n; ++i)
+    for (int k = rowStart[std::size_t(i)]; k < rowStart[std::size_t(i) + 1]; ++k) {
+      const double* g = vector.data() + 3 * std::size_t(k);
+      d[term[std::size_t(k)]] += g[0] * x[3 * i] + g[1] * x[3 * i + 1] + g[2] * x[3 * i + 2];
+    }
+  for (int r = 0; r < terms; ++r) dot[std::size_t(r)] *= weight[std::size_t(r)];
+#pragma omp parallel for schedule(static, 1024)
+  for (int i = 0; i < n; ++i)
+    for (int k = rowStart[std::size_t(i)]; k < rowStart[std::size_t(i) + 1]; ++k) {
+      const double* g = vector.data() + 3 * std::size_t(k);
+      const double s = d[term[std::size_t(k)]];
+      for (int c = 0; c < 3; ++c) y[3 * i + c] += s * g[c];
+    }
 }
 
 std::vector<Eigen::Matrix3d> blockDiagonalInverses(const BlockSparseMatrix3f& A) {

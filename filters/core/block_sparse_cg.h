@@ -8,10 +8,25 @@
 
 namespace repose {
 
+/// A symmetric positive semi-definite term of low rank, sum_r weight[r] g_r g_r^T, with each g_r
+/// sparse over the block rows: the coupling of a region-volume energy, which makes every node of a
+/// region's surface interact with every other (dense as blocks, a handful of vectors as a sum).
+struct LowRankTerm3 {
+  std::vector<int> rowStart;   ///< #rows + 1: entries of block row i are [rowStart[i], rowStart[i + 1])
+  std::vector<int> term;       ///< the r of each entry
+  std::vector<double> vector;  ///< 3 per entry: the block row's part of g_r
+  std::vector<double> weight;  ///< per term
+  bool empty() const { return weight.empty(); }
+  /// y += sum_r weight[r] g_r (g_r . x), threaded.
+  void multiplyAdd(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+};
+
 struct BlockSparseMatrix3f {
   std::vector<int> rowStart;   ///< #rows + 1: blocks of block row i are [rowStart[i], rowStart[i + 1])
   std::vector<int> column;     ///< block column of each block, ascending within a row
   std::vector<float> values;   ///< 9 per block, row-major
+  /// Optional: added to the blocks by multiply() (not seen by the block-diagonal preconditioners).
+  const LowRankTerm3* lowRank = nullptr;
   int rows() const { return rowStart.empty() ? 0 : int(rowStart.size()) - 1; }
   /// y = A x (x, y: 3 * rows()), threaded over block rows.
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;

@@ -97,6 +97,8 @@ class SpdSolver {
     current_ = &current;
     freeNodes_ = &freeNodes;
   }
+  /// A low-rank term added to the matrices given to solve() (BlockJacobi and TwoLevel only).
+  void setLowRank(const LowRankTerm3* lowRank) { lowRank_ = lowRank; }
 
   void solve(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int& iterations,
              double& residual) {
@@ -105,7 +107,13 @@ class SpdSolver {
       // The float matrix solves for the correction to x only (the residual is formed in double), so
       // its rounding stays relative to the correction, not to the node coordinates.
       toBlocks(A);
-      const Eigen::VectorXd r0 = b - A * x;
+      blocks_.lowRank = lowRank_;
+      Eigen::VectorXd r0 = b - A * x;
+      if (lowRank_ && !lowRank_->empty()) {
+        Eigen::VectorXd lx = Eigen::VectorXd::Zero(x.size());
+        lowRank_->multiplyAdd(x, lx);
+        r0 -= lx;
+      }
       const double bn = b.norm(), rn = r0.norm();
       iterations = 0;
       residual = bn > 0 ? rn / bn : 0.0;
@@ -114,6 +122,10 @@ class SpdSolver {
         BlockCgResult r;
         if (options_.preconditioner == CorotationalOptions::TwoLevel && tolerance < options_.twoLevelBelowTolerance) {
           prepareTwoLevel();
+          r = preconditionedBlockCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
+        } else if (lowRank_ && !lowRank_->empty()) {  // block Jacobi with the low-rank term (Woodbury)
+          if (!twoLevel_.aggregated()) twoLevel_.aggregate(blocks_, freePositions(*rest_), options_.coarseAggregateSize);
+          twoLevel_.updateFine(blocks_);
           r = preconditionedBlockCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
         } else {
           r = blockJacobiCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations);
@@ -221,6 +233,7 @@ class SpdSolver {
   const Points* rest_ = nullptr;
   const Points* current_ = nullptr;
   const std::vector<int>* freeNodes_ = nullptr;
+  const LowRankTerm3* lowRank_ = nullptr;
 };
 
 /// Per-tet state of the fixed-corotated energy at a pose: Irving's signed SVD F = U diag(sigma) V^T
@@ -261,6 +274,42 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   }
   const double stepLimit = options.stepTolerance * edgeSum / (6.0 * double(std::max<std::size_t>(nT, 1)));
 
+  // Volume regions (see CorotationalOptions::volumeRegions): tets with a free node only, the others
+  // keep their volume anyway. The pressure of each region follows the last evaluated pose.
+  int nRegions = 0;
+  for (int r : options.volumeRegions) nRegions = std::max(nRegions, r + 1);
+  std::vector<int> region(nRegions > 0 ? nT : 0, -1);
+  std::vector<double> regionRest(std::size_t(nRegions), 0.0), regionVolume(std::size_t(nRegions), 0.0),
+      regionPressure(std::size_t(nRegions), 0.0);
+  LowRankTerm3 regionCoupling;
+  if (nRegions > 0) {
+    for (std::size_t t = 0; t < nT; ++t) {
+      bool hasFree = false;
+      for (int a = 0; a < 4; ++a) hasFree = hasFree || fixedBone[std::size_t(tets(Eigen::Index(t), a))] < 0;
+      if (!hasFree || options.volumeRegions[t] < 0) continue;
+      region[t] = options.volumeRegions[t];
+      regionRest[std::size_t(region[t])] += restTets[t].volume;
+    }
+    regionCoupling.weight.resize(std::size_t(nRegions));
+    for (int r = 0; r < nRegions; ++r)
+      regionCoupling.weight[std::size_t(r)] =
+          regionRest[std::size_t(r)] > 0 ? options.regionVolumeStiffness * lambda / regionRest[std::size_t(r)] : 0.0;
+    // One entry per (free node, region of an incident tet); the gradients are filled by assemble().
+    regionCoupling.rowStart.assign(nFree + 1, 0);
+    for (std::size_t i = 0; i < nFree; ++i) {
+      const std::size_t first = regionCoupling.term.size();
+      for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
+        const int r = region[std::size_t(incTet[std::size_t(k)] / 4)];
+        if (r >= 0 && std::find(regionCoupling.term.begin() + std::ptrdiff_t(first), regionCoupling.term.end(), r) ==
+                          regionCoupling.term.end())
+          regionCoupling.term.push_back(r);
+      }
+      regionCoupling.rowStart[i + 1] = int(regionCoupling.term.size());
+    }
+    regionCoupling.vector.assign(3 * regionCoupling.term.size(), 0.0);
+    solver.setLowRank(&regionCoupling);
+  }
+
   std::vector<TetState> state(nT);
   // Energy and inverted-tet count of a pose; always refreshes the per-tet state (a rejected trial's
   // state is overwritten by the next trial, an accepted one's is the state of the new iterate).
@@ -268,9 +317,11 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     std::mutex lock;
     double energy = 0;
     int count = 0;
+    std::fill(regionVolume.begin(), regionVolume.end(), 0.0);
     parallelFor(nT, [&](std::size_t b, std::size_t e) {
       double localEnergy = 0;
       int localCount = 0;
+      std::vector<double> localRegion(std::size_t(nRegions), 0.0);
       for (std::size_t t = b; t < e; ++t) {
         const auto T = tets.row(Eigen::Index(t));
         const RestTet& rt = restTets[t];
@@ -286,11 +337,18 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         double p, stiffness;
         localEnergy += rt.volume * (mu * (sigma - Vec3::Ones()).squaredNorm() + volumeTerm(J, p, stiffness));
         state[t] = TetState{U, V, sigma};
+        if (nRegions > 0 && region[t] >= 0) localRegion[std::size_t(region[t])] += rt.volume * J;
       }
       std::lock_guard<std::mutex> guard(lock);
       energy += localEnergy;
       count += localCount;
+      for (int r = 0; r < nRegions; ++r) regionVolume[std::size_t(r)] += localRegion[std::size_t(r)];
     }, 512);
+    for (int r = 0; r < nRegions; ++r) {
+      const double excess = regionVolume[std::size_t(r)] - regionRest[std::size_t(r)];
+      regionPressure[std::size_t(r)] = regionCoupling.weight[std::size_t(r)] * excess;
+      energy += 0.5 * regionPressure[std::size_t(r)] * excess;
+    }
     inverted = count;
     return energy;
   };
@@ -313,6 +371,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         const Vec3& s = state[t].sigma;
         double pressure, stiffness;
         volumeTerm(s.prod(), pressure, stiffness);
+        if (nRegions > 0 && region[t] >= 0) pressure += regionPressure[std::size_t(region[t])];
         const Vec3 cofS(s(1) * s(2), s(0) * s(2), s(0) * s(1));  // cof F = U diag(cofS) V^T
         TetHessian& h = hessian[t];
         for (int m = 0; m < 3; ++m) {
@@ -355,6 +414,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         double* v0 = values + outerIdx[3 * i];
         std::fill(v0, v0 + 9 * rowLen, 0.0);
         Vec3 gi = Vec3::Zero();
+        const int couplingBegin = nRegions > 0 ? regionCoupling.rowStart[i] : 0;
+        const int couplingEnd = nRegions > 0 ? regionCoupling.rowStart[i + 1] : 0;
+        for (int q = couplingBegin; q < couplingEnd; ++q)
+          for (int c = 0; c < 3; ++c) regionCoupling.vector[3 * std::size_t(q) + std::size_t(c)] = 0.0;
         for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
           const int t = incTet[std::size_t(k)] / 4, a = incTet[std::size_t(k)] % 4;
           const RestTet& rt = restTets[std::size_t(t)];
@@ -363,11 +426,19 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
           const Vec3& s = st.sigma;
           double pressure, stiffness;
           volumeTerm(s.prod(), pressure, stiffness);
+          const int r = nRegions > 0 ? region[std::size_t(t)] : -1;
+          if (r >= 0) pressure += regionPressure[std::size_t(r)];
           const Vec3 cofS(s(1) * s(2), s(0) * s(2), s(0) * s(1));
           const Eigen::Matrix<double, 4, 3> g = gradients(rt);
           // Each node's gradient in the frame of V.
           const Eigen::Matrix<double, 3, 4> w = st.V.transpose() * g.transpose();
           const Vec3 wa = w.col(a);
+          if (r >= 0) {  // this node's part of the gradient of the region's volume: V0 cof(F) g_a
+            int q = couplingBegin;
+            while (regionCoupling.term[std::size_t(q)] != r) ++q;
+            const Vec3 dv = rt.volume * (st.U * cofS.cwiseProduct(wa));
+            for (int c = 0; c < 3; ++c) regionCoupling.vector[3 * std::size_t(q) + std::size_t(c)] += dv(c);
+          }
           // Force: P g_a with P = U diag(2 mu (s - 1) + p cofS) V^T, times the volume.
           gi += rt.volume * (st.U * (2.0 * mu * (s - Vec3::Ones()) + pressure * cofS).cwiseProduct(wa));
           for (int bb = 0; bb < 4; ++bb) {
@@ -475,6 +546,11 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     newton(std::max(1, options.maxNewtonIterations / 2));
   }
   rep.energyAfter = energy;
+  evaluate(posed, inverted);
+  rep.regionVolumeRatio.resize(std::size_t(nRegions));
+  for (int r = 0; r < nRegions; ++r)
+    rep.regionVolumeRatio[std::size_t(r)] =
+        regionRest[std::size_t(r)] > 0 ? regionVolume[std::size_t(r)] / regionRest[std::size_t(r)] : 1.0;
 }
 
 }  // namespace
@@ -515,6 +591,11 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     throw std::invalid_argument("relaxCorotational: inversionPenalty must be >= 0");
   if (!(options.inversionThreshold >= 0.0 && options.inversionThreshold < 1.0))
     throw std::invalid_argument("relaxCorotational: inversionThreshold must be in [0, 1)");
+  if (!options.volumeRegions.empty() && Eigen::Index(options.volumeRegions.size()) != nT)
+    throw std::invalid_argument("relaxCorotational: volumeRegions has " + std::to_string(options.volumeRegions.size()) +
+                                " entries but the mesh has " + std::to_string(nT) + " tets");
+  if (!(options.regionVolumeStiffness >= 0.0) || !std::isfinite(options.regionVolumeStiffness))
+    throw std::invalid_argument("relaxCorotational: regionVolumeStiffness must be >= 0");
   for (Eigen::Index t = 0; t < nT; ++t)
     for (int a = 0; a < 4; ++a)
       if (tets(t, a) < 0 || tets(t, a) >= nV)

@@ -64,6 +64,17 @@ struct CorotationalOptions {
   /// (all but the most compressed) untouched. 0 turns it off.
   double inversionPenalty = 10.0;
   double inversionThreshold = 0.1;
+  /// FixedCorotated: optional volume regions, one entry per tet (>= 0: the tet's region, -1: none;
+  /// empty: no region term). Each region r adds the energy
+  ///   regionVolumeStiffness * lambda / 2 * V_r0 (V_r / V_r0 - 1)^2
+  /// over the volume V_r of its tets that have a free node: the per-tet volume term again, for the
+  /// region as a whole. Linear tets lock when nearly incompressible: at nu = 0.49 a squeezed part of
+  /// the body loses volume because the per-tet pressures cannot reach a volume-keeping bulge. One
+  /// pressure per region (a piecewise-constant pressure field, as in mixed elements) has no such
+  /// lock. Its Hessian couples a region's whole surface: kept as a low-rank term beside the sparse
+  /// blocks in CG (BlockJacobi and TwoLevel only; the other solvers omit it from the Newton matrix).
+  std::vector<int> volumeRegions;
+  double regionVolumeStiffness = 3.0;
   /// Tets still inverted after the solve get their free nodes moved out of the fold (see
   /// tet_untangling.h); FixedCorotated then resumes Newton from there.
   bool untangle = true;
@@ -85,6 +96,7 @@ struct CorotationalReport {
   int untangledNodes = 0;                ///< node moves made by the untangling step
   double untangleSeconds = 0.0;          ///< ... and its time
   int invertedRigid = 0;                 ///< inverted tets after relaxing whose nodes are all fixed
+  std::vector<double> regionVolumeRatio; ///< FixedCorotated with volumeRegions: V_r / V_r0 after relaxing
 };
 
 /// Relaxes posed to the static equilibrium of corotational linear elasticity.

@@ -44,6 +44,56 @@ struct TwoLevelPreconditioner::Impl {
   std::vector<Eigen::Matrix3f> diagonalInverse;
   std::vector<Eigen::Vector3f> offset;  // node minus its aggregate's centroid, over the aggregate's rms radius
   mutable Eigen::VectorXd coarseRhs, coarseSolution, partial;
+  bool useCoarse = true;
+
+  // The matrix's low-rank term G K G^T, if any, joins the fine level by Woodbury's identity:
+  //   (D + G K G^T)^-1 = D^-1 - D^-1 G C G^T D^-1,   C = K^1/2 (I + K^1/2 G^T D^-1 G K^1/2)^-1 K^1/2.
+  // D is block diagonal, so D^-1 G has G's pattern; C is a small dense matrix.
+  const LowRankTerm3* lowRank = nullptr;
+  std::vector<double> scaledVectors;  // D^-1 g per entry of lowRank
+  Eigen::MatrixXd lowRankSolve;        // C
+  mutable Eigen::VectorXd lowRankDot;
+
+  void prepareLowRank(const BlockSparseMatrix3f& A) {
+    lowRank = A.lowRank && !A.lowRank->empty() ? A.lowRank : nullptr;
+    if (!lowRank) return;
+    const LowRankTerm3& L = *lowRank;
+    if (int(L.rowStart.size()) != n + 1)
+      throw std::invalid_argument("TwoLevelPreconditioner: the low-rank term's rows differ from the matrix's");
+    const int terms = int(L.weight.size());
+    scaledVectors.resize(L.vector.size());
+    Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(terms, terms);  // G^T D^-1 G
+    for (int i = 0; i < n; ++i)
+      for (int k = L.rowStart[std::size_t(i)]; k < L.rowStart[std::size_t(i) + 1]; ++k) {
+        const Vec3 g(L.vector.data() + 3 * std::size_t(k));
+        const Vec3 dg = diagonalInverse[std::size_t(i)].cast<double>() * g;
+        for (int c = 0; c < 3; ++c) scaledVectors[3 * std::size_t(k) + std::size_t(c)] = dg(c);
+        for (int k2 = L.rowStart[std::size_t(i)]; k2 < L.rowStart[std::size_t(i) + 1]; ++k2)
+          gram(L.term[std::size_t(k2)], L.term[std::size_t(k)]) += Vec3(L.vector.data() + 3 * std::size_t(k2)).dot(dg);
+      }
+    const Eigen::VectorXd root = Eigen::Map<const Eigen::VectorXd>(L.weight.data(), terms).cwiseMax(0.0).cwiseSqrt();
+    const Eigen::MatrixXd inner =
+        Eigen::MatrixXd::Identity(terms, terms) + root.asDiagonal() * gram * root.asDiagonal();
+    lowRankSolve = root.asDiagonal() * inner.ldlt().solve(Eigen::MatrixXd(root.asDiagonal()));
+  }
+
+  /// z -= D^-1 G C G^T D^-1 r (z holding D^-1 r and the coarse part already); returns the change of r . z.
+  double subtractLowRank(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
+    const LowRankTerm3& L = *lowRank;
+    const int terms = int(L.weight.size());
+    lowRankDot.setZero(terms);
+    double* t = lowRankDot.data();
+#pragma omp parallel for schedule(static, 1024) reduction(+ : t[:terms])
+    for (int i = 0; i < n; ++i)
+      for (int k = L.rowStart[std::size_t(i)]; k < L.rowStart[std::size_t(i) + 1]; ++k)
+        t[L.term[std::size_t(k)]] += Vec3(scaledVectors.data() + 3 * std::size_t(k)).dot(r.segment<3>(3 * Eigen::Index(i)));
+    const Eigen::VectorXd y = lowRankSolve * lowRankDot;
+#pragma omp parallel for schedule(static, 1024)
+    for (int i = 0; i < n; ++i)
+      for (int k = L.rowStart[std::size_t(i)]; k < L.rowStart[std::size_t(i) + 1]; ++k)
+        z.segment<3>(3 * Eigen::Index(i)) -= y[L.term[std::size_t(k)]] * Vec3(scaledVectors.data() + 3 * std::size_t(k));
+    return -lowRankDot.dot(y);
+  }
 
   /// coarseRhs = P^T r, in node order (a gather per aggregate would jump through r) into one
   /// coarse vector per thread, summed afterwards.
@@ -77,20 +127,25 @@ struct TwoLevelPreconditioner::Impl {
 
   /// z = D^-1 r + P Ac^-1 P^T r; returns r . z.
   double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
-    restrictTo(r);
-    coarseSolution = llt.solve(coarseRhs);
+    if (useCoarse) {
+      restrictTo(r);
+      coarseSolution = llt.solve(coarseRhs);
+    }
     z.resize(r.size());
     double rz = 0;
 #pragma omp parallel for schedule(static, 512) reduction(+ : rz)
     for (int i = 0; i < n; ++i) {
-      const int a = aggregateOf[std::size_t(i)];
-      const int o = coarseOffset[std::size_t(a)];
-      Vec3 zi = coarseSolution.segment<3>(o) +
-                diagonalInverse[std::size_t(i)].cast<double>() * r.segment<3>(3 * Eigen::Index(i));
-      if (modes[std::size_t(a)] == 6) zi += coarseSolution.segment<3>(o + 3).cross(offset[std::size_t(i)].cast<double>());
+      Vec3 zi = diagonalInverse[std::size_t(i)].cast<double>() * r.segment<3>(3 * Eigen::Index(i));
+      if (useCoarse) {
+        const int a = aggregateOf[std::size_t(i)];
+        const int o = coarseOffset[std::size_t(a)];
+        zi += coarseSolution.segment<3>(o);
+        if (modes[std::size_t(a)] == 6) zi += coarseSolution.segment<3>(o + 3).cross(offset[std::size_t(i)].cast<double>());
+      }
       z.segment<3>(3 * Eigen::Index(i)) = zi;
       rz += zi.dot(r.segment<3>(3 * Eigen::Index(i)));
     }
+    if (lowRank) rz += subtractLowRank(r, z);
     return rz;
   }
 };
@@ -277,15 +332,22 @@ void TwoLevelPreconditioner::aggregate(const BlockSparseMatrix3f& pattern, const
   s.Ac.outerIndexPtr()[nc] = s.valueStart.back();
 }
 
+void TwoLevelPreconditioner::updateFine(const BlockSparseMatrix3f& A) {
+  Impl& s = *impl_;
+  if (A.rows() != s.n) throw std::invalid_argument("TwoLevelPreconditioner::update: sizes differ from aggregate()");
+  const std::vector<Mat3> inverse = blockDiagonalInverses(A);
+  s.diagonalInverse.resize(inverse.size());
+  for (std::size_t i = 0; i < inverse.size(); ++i) s.diagonalInverse[i] = inverse[i].cast<float>();
+  s.prepareLowRank(A);
+  s.useCoarse = false;
+}
+
 void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& positions) {
   Impl& s = *impl_;
   if (A.rows() != s.n || positions.rows() != s.n)
     throw std::invalid_argument("TwoLevelPreconditioner::update: sizes differ from aggregate()");
-  {
-    const std::vector<Mat3> inverse = blockDiagonalInverses(A);
-    s.diagonalInverse.resize(inverse.size());
-    for (std::size_t i = 0; i < inverse.size(); ++i) s.diagonalInverse[i] = inverse[i].cast<float>();
-  }
+  updateFine(A);
+  s.useCoarse = true;
   const int m = aggregates();
 
   // Rigid modes about the current centroids, offsets scaled by the aggregate's rms radius so that

@@ -7,6 +7,9 @@
 // of iterations, and the coarse space removes it. (A symmetric V-cycle, damped block-Jacobi pre- and
 // post-smoothing around the coarse correction, halves the iterations but costs three products with
 // A per iteration instead of one: slower overall.)
+// A low-rank term of the matrix (BlockSparseMatrix3f::lowRank) joins D exactly, by Woodbury's
+// identity: M^-1 = (D + G K G^T)^-1 + P Ac^-1 P^T. Its few large eigenvalues (a region's volume
+// stiffness acts on its whole surface at once) would otherwise each cost CG iterations.
 #include <Eigen/Core>
 #include <memory>
 #include <vector>
@@ -35,6 +38,8 @@ class TwoLevelPreconditioner : public BlockPreconditioner {
   /// Ac = P^T A P and its Cholesky factorization (the symbolic analysis is kept for later calls).
   /// Throws std::runtime_error if the factorization fails.
   void update(const BlockSparseMatrix3f& A, const Points& positions);
+  /// Prepares for A without the coarse level: M^-1 = D^-1 alone (block Jacobi).
+  void updateFine(const BlockSparseMatrix3f& A);
 
   double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
 
