@@ -16,8 +16,9 @@ struct AutoRigOptions {
   double maxGapMm = 6.0;
   /// ... or at most this many voxels (of the largest spacing), whichever is larger: a coarse image
   /// cannot show a joint space narrower than a couple of voxels, and a hinge whose bones taper
-  /// toward the joint (as the phantom's knees and elbows do) shows a wider one.
-  double maxGapVoxels = 3.0;
+  /// toward the joint (as the phantom's knees and elbows do) shows a wider one (30 mm at the tiny
+  /// phantom's elbows, 3 of its 10 mm voxels).
+  double maxGapVoxels = 3.5;
   /// Connected components smaller than noiseFraction x (the label's largest component), or than
   /// minComponentVoxels, are segmentation noise: ignored (left in the volume, in no bone).
   double noiseFraction = 0.01;

@@ -165,7 +165,7 @@ struct Wedge {
   double halfAngle = 0, reach = 0, tip = 0;
   bool keeps(const V3& p) const {
     V3 d = p - centre;
-    d -= d.dot(axis) * axis;
+    d -= d.dot(axis) * axis;  // a zero axis makes the wedge a cone about `direction`
     const double r = d.norm();
     if (r >= reach) return true;
     return r >= tip && std::acos(std::clamp(d.dot(direction) / r, -1.0, 1.0)) <= halfAngle;
@@ -235,7 +235,8 @@ V3 spacingOf(PhantomSize size) {
 }
 
 // Half angles of the hinge wedges (see Wedge): knees clear each other to 180 - 2 * 20 = 140 degrees
-// of flexion, elbows to 150.
+// of flexion, elbows to 150. Elbows get cones rather than wedges: motion capture bends them in
+// varying planes (the upper arm's twist is not captured), knees about their hinge axis.
 constexpr double kKneeWedge = 20 * 3.14159265358979323846 / 180;
 constexpr double kElbowWedge = 15 * 3.14159265358979323846 / 180;
 
@@ -410,12 +411,12 @@ Model buildModel(PhantomSize size) {
       b.shape.add(sphere(shoulder, headR));
       b.shape.add(capsule(shoulder, condyle, 12));
       b.shape.add(ellipsoid(condyle, V3(26, 15, 12)));
-      b.wedges.push_back({elbow, V3::UnitX(), V3::UnitZ(), kElbowWedge, 50, g / 2});
+      b.wedges.push_back({elbow, V3::Zero(), V3::UnitZ(), kElbowWedge, 50, g / 2});
     }
     {
       Bone& b = bone(forearm);
       b.shape.add(capsule(elbow - V3(0, 0, g / 2 + 13), wrist + V3(0, 0, g / 2 + 13), 13));
-      b.wedges.push_back({elbow, V3::UnitX(), -V3::UnitZ(), kElbowWedge, 50, g / 2});
+      b.wedges.push_back({elbow, V3::Zero(), -V3::UnitZ(), kElbowWedge, 50, g / 2});
       rules.push_back({forearm, humerus});
     }
     {
