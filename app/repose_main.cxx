@@ -433,10 +433,7 @@ struct FidelityReport {
 void requireDisplay(int argc, char** argv, const char* why);
 
 void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
-  const std::string volume = o.get("relax-volume", "segments");
-  if (volume != "segments" && volume != "body" && volume != "none")
-    throw UsageError("--relax-volume must be segments, body or none");
-  pipeline.setRelaxationVolume(volume);  // also for the +fem methods of --compare
+  pipeline.setRelaxationVolume(o.get("relax-volume", "segments"));  // also for the +fem methods of --compare
   if (!o.has("relax")) {
     if (o.has("relax-iterations") || o.has("poisson") || o.has("relax-model") || (o.has("relax-volume") && !o.has("compare")))
       throw UsageError("--relax-model, --relax-iterations, --relax-volume and --poisson need --relax");

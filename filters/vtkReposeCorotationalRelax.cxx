@@ -11,10 +11,10 @@
 #include "vtkPoints.h"
 #include "vtkUnstructuredGrid.h"
 
-#include <algorithm>
 #include <exception>
-#include <map>
 
+#include "ReposeWeightArrays.h"
+#include "body_segments.h"
 #include "corotational_fem.h"
 
 vtkStandardNewMacro(vtkReposeCorotationalRelax);
@@ -31,38 +31,6 @@ repose::Points ToPoints(vtkPoints* points)
     p.row(i) << x[0], x[1], x[2];
   }
   return p;
-}
-
-/// Per tet: 0 (the whole body) or, by segment, the bone with the largest weight summed over the tet's
-/// nodes (sparse Weights / BoneIds point data; without them the whole body).
-std::vector<int> VolumeRegionsOf(vtkUnstructuredGrid* rest, const repose::Tets& tets, bool bySegment)
-{
-  std::vector<int> region(static_cast<std::size_t>(tets.rows()), 0);
-  vtkDataArray* weights = rest->GetPointData()->GetArray("Weights");
-  vtkDataArray* bones = rest->GetPointData()->GetArray("BoneIds");
-  if (!bySegment || !weights || !bones || weights->GetNumberOfComponents() != bones->GetNumberOfComponents() ||
-    weights->GetNumberOfTuples() != rest->GetNumberOfPoints() ||
-    bones->GetNumberOfTuples() != rest->GetNumberOfPoints())
-  {
-    return region;
-  }
-  const int k = weights->GetNumberOfComponents();
-  std::map<int, double> sum;
-  for (Eigen::Index t = 0; t < tets.rows(); ++t)
-  {
-    sum.clear();
-    for (int a = 0; a < 4; ++a)
-    {
-      for (int c = 0; c < k; ++c)
-      {
-        sum[static_cast<int>(bones->GetComponent(tets(t, a), c))] += weights->GetComponent(tets(t, a), c);
-      }
-    }
-    const auto best = std::max_element(sum.begin(), sum.end(),
-      [](const std::pair<const int, double>& x, const std::pair<const int, double>& y) { return x.second < y.second; });
-    region[static_cast<std::size_t>(t)] = best->first;
-  }
-  return region;
 }
 }
 
@@ -138,9 +106,15 @@ int vtkReposeCorotationalRelax::RequestData(
     options.stepTolerance = this->StepTolerance;
     options.energyTolerance = this->EnergyTolerance;
     options.regionVolumeStiffness = this->RegionVolumeStiffness;
-    if (this->VolumeRegions > 0)
+    // Segments need the rest mesh's weights; without them the whole body is one region.
+    if (this->VolumeRegions == 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
     {
-      options.volumeRegions = VolumeRegionsOf(rest, tets, this->VolumeRegions == 2);
+      options.volumeRegions = repose::bodySegments(
+        repose_vtk::ToSparseWeights(rest->GetPointData(), rest->GetNumberOfPoints()), tets);
+    }
+    else if (this->VolumeRegions > 0)
+    {
+      options.volumeRegions.assign(static_cast<std::size_t>(nt), 0);
     }
     repose::CorotationalReport report;
     repose::relaxCorotational(restNodes, tets, fixedBone, nodes, options, &report);

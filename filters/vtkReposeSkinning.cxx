@@ -14,6 +14,7 @@
 #include "vtkUnsignedShortArray.h"
 #include "vtkUnstructuredGrid.h"
 
+#include "ReposeWeightArrays.h"
 #include "pose.h"
 #include "skeleton.h"
 #include "skinning.h"
@@ -54,43 +55,7 @@ struct vtkReposeSkinning::Internals
     std::vector<int>& FixedBone)
   {
     vtkPointData* pd = input->GetPointData();
-    vtkDataArray* w = pd->GetArray("Weights");
-    vtkDataArray* b = pd->GetArray("BoneIds");
-    if (!w || !b)
-      throw std::invalid_argument(
-        "input lacks point data \"Weights\" and \"BoneIds\" (run vtkReposeBoneWeights first)");
-    const int k = w->GetNumberOfComponents();
-    if (b->GetNumberOfComponents() != k || w->GetNumberOfTuples() != np ||
-      b->GetNumberOfTuples() != np)
-      throw std::invalid_argument("point data \"Weights\" and \"BoneIds\" disagree in size");
-    Weights.k = k;
-    Weights.weight.resize(std::size_t(np) * k);
-    Weights.bone.resize(std::size_t(np) * k);
-    // Fast path for vtkReposeBoneWeights' own array types.
-    auto* wf = vtkFloatArray::FastDownCast(w);
-    auto* bu = vtkUnsignedShortArray::FastDownCast(b);
-    if (wf && bu)
-    {
-      const std::size_t n = std::size_t(np) * k;
-      std::copy(wf->GetPointer(0), wf->GetPointer(0) + n, Weights.weight.begin());
-      std::copy(bu->GetPointer(0), bu->GetPointer(0) + n, Weights.bone.begin());
-    }
-    else
-    {
-      for (vtkIdType i = 0; i < np; ++i)
-      {
-        for (int c = 0; c < k; ++c)
-        {
-          const std::size_t s = std::size_t(i) * k + c;
-          Weights.weight[s] = static_cast<float>(w->GetComponent(i, c));
-          const double bone = b->GetComponent(i, c);
-          if (bone < 0 || bone > 65535 || bone != std::floor(bone))
-            throw std::invalid_argument("BoneIds of node " + std::to_string(i) + " holds " +
-              std::to_string(bone) + ", not a bone index");
-          Weights.bone[s] = static_cast<std::uint16_t>(bone);
-        }
-      }
-    }
+    Weights = repose_vtk::ToSparseWeights(pd, np);
     FixedBone.clear();
     if (vtkDataArray* f = pd->GetArray("FixedBone"))
     {

@@ -411,10 +411,13 @@ TEST(FixedCorotatedFem, RegionVolumeTermsKeepEachRegionsVolume) {
   EXPECT_LT(without[0], 0.99);
   EXPECT_LT((held[0] - held[1]).cwiseAbs().maxCoeff(), 1e-4);
   EXPECT_GT((held[0] - plain).cwiseAbs().maxCoeff(), 1e-2);
-  // Bad regions: one entry per tet is needed.
-  opt.volumeRegions.pop_back();
+  // Bad regions: one entry per tet, each below the tet count.
   Points x = stamped;
+  opt.volumeRegions.back() = int(b.tets.rows());
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt), std::invalid_argument);
+  opt.volumeRegions.pop_back();
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt), std::invalid_argument);
+  EXPECT_EQ(x, stamped);
 }
 
 TEST(FixedCorotatedFem, InvertedTetsAreUntangledAndTheCountNeverGrows) {

@@ -1,6 +1,8 @@
 // Dual quaternions and skinning of nodes (DQS and LBS).
 #include <gtest/gtest.h>
 
+#include "body_segments.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -354,4 +356,30 @@ TEST(Skinning, FloatCacheThroughput500kNodes) {
     EXPECT_LT(ms, 500.0);
     for (float v : posed) ASSERT_TRUE(std::isfinite(v));
   }
+}
+
+// A tet's segment is the bone with the largest weight summed over its nodes, even where no single
+// node has that bone first; ties go to the lower bone.
+TEST(BodySegments, LargestSummedWeightWins) {
+  repose::SparseWeights w;
+  w.k = 2;
+  // node: (bone, weight) pairs
+  const std::vector<std::pair<int, float>> rows = {{3, 0.6f}, {5, 0.4f},   // 0
+                                                   {3, 0.55f}, {5, 0.45f}, // 1
+                                                   {7, 0.5f}, {5, 0.5f},   // 2
+                                                   {7, 0.9f}, {5, 0.1f},   // 3
+                                                   {1, 1.0f}, {0, 0.0f},   // 4
+                                                   {2, 1.0f}, {0, 0.0f}};  // 5
+  for (const auto& [bone, weight] : rows) {
+    w.bone.push_back(std::uint16_t(bone));
+    w.weight.push_back(weight);
+  }
+  repose::Tets tets(3, 4);
+  tets << 0, 1, 2, 3,   // bone 3: 1.15, bone 5: 1.45, bone 7: 1.4 -> 5, first at no node
+      0, 1, 4, 5,       // bone 3: 1.15, bones 1 and 2: 1.0 -> 3
+      4, 5, 4, 5;       // bones 1 and 2 tie at 2.0 -> 1
+  EXPECT_EQ(repose::bodySegments(w, tets), (std::vector<int>{5, 3, 1}));
+  repose::Tets bad(1, 4);
+  bad << 0, 1, 2, 6;
+  EXPECT_THROW(repose::bodySegments(w, bad), std::invalid_argument);
 }

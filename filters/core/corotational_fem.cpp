@@ -545,8 +545,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     energy = evaluate(posed, inverted);
     newton(std::max(1, options.maxNewtonIterations / 2));
   }
-  rep.energyAfter = energy;
-  evaluate(posed, inverted);
+  rep.energyAfter = energy;  // regionVolume is that of posed too: evaluate() last ran on it or on the accepted trial
   rep.regionVolumeRatio.resize(std::size_t(nRegions));
   for (int r = 0; r < nRegions; ++r)
     rep.regionVolumeRatio[std::size_t(r)] =
@@ -594,6 +593,11 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   if (!options.volumeRegions.empty() && Eigen::Index(options.volumeRegions.size()) != nT)
     throw std::invalid_argument("relaxCorotational: volumeRegions has " + std::to_string(options.volumeRegions.size()) +
                                 " entries but the mesh has " + std::to_string(nT) + " tets");
+  for (std::size_t t = 0; t < options.volumeRegions.size(); ++t)
+    if (options.volumeRegions[t] >= nT)  // more regions than tets: not a region id
+      throw std::invalid_argument("relaxCorotational: volumeRegions[" + std::to_string(t) + "] = " +
+                                  std::to_string(options.volumeRegions[t]) + " is not below the tet count " +
+                                  std::to_string(nT));
   if (!(options.regionVolumeStiffness >= 0.0) || !std::isfinite(options.regionVolumeStiffness))
     throw std::invalid_argument("relaxCorotational: regionVolumeStiffness must be >= 0");
   for (Eigen::Index t = 0; t < nT; ++t)

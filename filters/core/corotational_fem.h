@@ -64,7 +64,7 @@ struct CorotationalOptions {
   /// (all but the most compressed) untouched. 0 turns it off.
   double inversionPenalty = 10.0;
   double inversionThreshold = 0.1;
-  /// FixedCorotated: optional volume regions, one entry per tet (>= 0: the tet's region, -1: none;
+  /// FixedCorotated: optional volume regions, one entry per tet (0 .. #tets - 1: the tet's region, -1: none;
   /// empty: no region term). Each region r adds the energy
   ///   regionVolumeStiffness * lambda / 2 * V_r0 (V_r / V_r0 - 1)^2
   /// over the volume V_r of its tets that have a free node: the per-tet volume term again, for the

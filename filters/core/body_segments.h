@@ -1,0 +1,15 @@
+#pragma once
+// Body segments from skinning weights: each tet belongs to the bone with the largest weight summed
+// over its four nodes (the regions whose volume the FEM relaxation holds as a whole).
+#include <vector>
+
+#include "sparse_weights.h"
+#include "tet_mesh.h"
+
+namespace repose {
+
+/// Per tet, the segment's bone index. Ties go to the lower bone index.
+/// Throws std::invalid_argument if a tet names a node the weights do not cover.
+std::vector<int> bodySegments(const SparseWeights& weights, const Tets& tets);
+
+}  // namespace repose
