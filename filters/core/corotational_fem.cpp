@@ -10,10 +10,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <mutex>
 #include <stdexcept>
 #include <string>
 
+#include "blas_threads.h"
 #include "block_sparse_cg.h"
 #include "parallel_for.h"
 #include "signed_svd.h"
@@ -260,9 +262,10 @@ struct VolumeTerm {
 /// Gauss-Newton minimization of the fixed-corotated energy over the free nodes (see the header).
 void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, const CorotationalOptions& options,
                          CorotationalReport& rep, const std::vector<RestTet>& restTets,
-                         const std::vector<int>& fixedBone, const std::vector<int>& dof,
+                         const std::vector<int>& fixedBone,
                          const std::vector<int>& freeNodes, const std::vector<int>& incStart,
-                         const std::vector<int>& incTet, SpMat& A, SpdSolver& solver, double lambda, double mu) {
+                         const std::vector<int>& incTet, const std::vector<std::uint16_t>& incColumn, SpMat& A,
+                         SpdSolver& solver, double lambda, double mu) {
   const VolumeTerm volumeTerm{lambda, options.inversionPenalty * lambda, options.inversionThreshold};
   const std::size_t nT = std::size_t(tets.rows()), nFree = freeNodes.size();
   const Eigen::Index n = Eigen::Index(3 * nFree);
@@ -405,12 +408,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   auto assemble = [&]() {
     prepareHessians();
     double* values = A.valuePtr();
-    const int* inner = A.innerIndexPtr();
     const int* outerIdx = A.outerIndexPtr();
     parallelFor(nFree, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
         const int rowLen = (outerIdx[3 * i + 1] - outerIdx[3 * i]) / 3;
-        const int* cols = inner + outerIdx[3 * i];
         double* v0 = values + outerIdx[3 * i];
         std::fill(v0, v0 + 9 * rowLen, 0.0);
         Vec3 gi = Vec3::Zero();
@@ -457,8 +458,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
               L(pj, pi) += double(h.d[m]) * wa(pi) * wb(pj);
             }
             const Mat3 block = rt.volume * (st.U * L * st.U.transpose());
-            const int col = 3 * dof[std::size_t(v)];
-            const std::size_t off = std::size_t(std::lower_bound(cols, cols + 3 * rowLen, col) - cols);
+            const std::size_t off = incColumn[4 * std::size_t(k) + std::size_t(bb)];
             for (int cc = 0; cc < 3; ++cc) {
               double* vc = v0 + 3 * cc * rowLen + off;
               for (int d = 0; d < 3; ++d) vc[d] += block(cc, d);
@@ -535,14 +535,24 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   newton(options.maxNewtonIterations);
   // The energy is finite through det F = 0, so a few tets may settle inverted: move their free
   // nodes out of the fold, then let Newton smooth the neighbourhood (it never re-inverts a tet);
-  // Newton's moves may open room for another round.
+  // Newton's moves may open room for another round. A round that leaves as many tets inverted
+  // (the untangling could not free them) is undone at once: its Newton steps would only spend
+  // time, and its pose is less relaxed than the one before it.
   for (int round = 0; round < 3 && inverted > 0 && options.untangle; ++round) {
     const auto untangleStart = std::chrono::steady_clock::now();
+    const Points before = posed;
+    const int invertedBefore = inverted;
     const UntangleReport u = untangleTets(rest, tets, fixedBone, posed);
     rep.untangledNodes += u.nodesMoved;
     rep.untangleSeconds += seconds(untangleStart);
     if (u.nodesMoved == 0) break;
     energy = evaluate(posed, inverted);
+    if (inverted >= invertedBefore) {
+      rep.untangledNodes -= u.nodesMoved;
+      posed = before;
+      energy = evaluate(posed, inverted);
+      break;
+    }
     newton(std::max(1, options.maxNewtonIterations / 2));
   }
   rep.energyAfter = energy;  // regionVolume is that of posed too: evaluate() last ran on it or on the accepted trial
@@ -612,6 +622,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
         "relaxCorotational: no node is fixed; the elastic system is singular (mark bone nodes "
         "with fixedBone >= 0)");
 
+  const SingleThreadedBlas blasOnThisThread;  // the CG's threads keep the cores (see blas_threads.h)
   CorotationalReport local;
   CorotationalReport& rep = report ? *report : local;
   rep = CorotationalReport{};
@@ -714,6 +725,27 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
       }
     }
   });
+  // Where each (free node, incident tet, tet node) block goes in the node's row: its scalar column
+  // offset there, found once here instead of by a search in every assembly.
+  std::vector<std::uint16_t> incColumn(4 * incTet.size(), std::uint16_t(0xFFFF));
+  std::atomic<bool> rowTooLong{false};
+  parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const std::vector<int>& cols = rowCols[i];
+      if (3 * cols.size() >= 0xFFFF) rowTooLong = true;
+      for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
+        const int t = incTet[std::size_t(k)] / 4;
+        for (int c = 0; c < 4; ++c) {
+          const int v = tets(t, c);
+          if (fixedBone[std::size_t(v)] >= 0) continue;
+          const auto pos = std::lower_bound(cols.begin(), cols.end(), dof[std::size_t(v)]) - cols.begin();
+          incColumn[4 * std::size_t(k) + std::size_t(c)] = std::uint16_t(3 * pos);
+        }
+      }
+    }
+  });
+  if (rowTooLong)  // a node with over 21844 neighbours: not a tet mesh a skinning could come from
+    throw std::invalid_argument("relaxCorotational: a node has too many neighbours");
   rowCols.clear();
   rowCols.shrink_to_fit();
 
@@ -724,7 +756,8 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   SpdSolver solver(options);
   solver.setNodes(rest, posed, freeNodes);
   if (options.model == CorotationalOptions::FixedCorotated) {
-    relaxFixedCorotated(rest, tets, posed, options, rep, restTets, fixedBone, dof, freeNodes, incStart, incTet, A, solver,
+    relaxFixedCorotated(rest, tets, posed, options, rep, restTets, fixedBone, freeNodes, incStart, incTet, incColumn, A,
+                        solver,
                         lambda, mu);
     countInvertedAfter(posed, tets, fixedBone, rep);
     rep.seconds = seconds(start);
@@ -748,12 +781,10 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     // K'_ab = R K_ab R^T with K_ab = V (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a.g_b) I), and
     // rhs_i = sum_t R sum_b K_ab x0_b  -  sum_{b fixed} K'_ab x_b.
     double* values = A.valuePtr();
-    const int* inner = A.innerIndexPtr();
     const int* outerIdx = A.outerIndexPtr();
     parallelFor(nFree, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
         const int rowLen = (outerIdx[3 * i + 1] - outerIdx[3 * i]) / 3;  // blocks in the row
-        const int* cols = inner + outerIdx[3 * i];                       // scalar columns of row 3i
         double* v0 = values + outerIdx[3 * i];
         std::fill(v0, v0 + 9 * rowLen, 0.0);
         Vec3 r = Vec3::Zero();
@@ -777,9 +808,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
             if (fixedBone[std::size_t(v)] >= 0) {
               r -= block * node(posed, v);
             } else {
-              const int col = 3 * dof[std::size_t(v)];
-              const int* pos = std::lower_bound(cols, cols + 3 * rowLen, col);
-              const std::size_t off = std::size_t(pos - cols);
+              const std::size_t off = incColumn[4 * std::size_t(k) + std::size_t(bb)];
               for (int c = 0; c < 3; ++c) {
                 double* vc = v0 + 3 * c * rowLen + off;
                 for (int d = 0; d < 3; ++d) vc[d] += block(c, d);
