@@ -21,6 +21,7 @@
 #include "signed_svd.h"
 #include "tet_untangling.h"
 #include "two_level_preconditioner.h"
+#include "volume_term.h"
 
 namespace repose {
 namespace {
@@ -245,20 +246,6 @@ struct TetState {
   Vec3 sigma;
 };
 
-/// The energy's volume term h(J) = lambda/2 (J - 1)^2 + kappa (eps - J)_+^2: the fixed-corotated
-/// pressure plus a barrier-like penalty below J = eps, which the fixed-corotated term alone lacks
-/// (it is finite and smooth through J = 0, so a fold can be its minimum). Returns h; p = h'(J),
-/// stiffness = h''(J).
-struct VolumeTerm {
-  double lambda, kappa, eps;
-  double operator()(double J, double& p, double& stiffness) const {
-    const double below = std::max(0.0, eps - J);
-    p = lambda * (J - 1.0) - 2.0 * kappa * below;
-    stiffness = lambda + (below > 0.0 ? 2.0 * kappa : 0.0);
-    return 0.5 * lambda * (J - 1.0) * (J - 1.0) + kappa * below * below;
-  }
-};
-
 /// Gauss-Newton minimization of the fixed-corotated energy over the free nodes (see the header).
 void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, const CorotationalOptions& options,
                          CorotationalReport& rep, const std::vector<RestTet>& restTets,
@@ -314,6 +301,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   }
 
   std::vector<TetState> state(nT);
+  std::vector<char> barrier(nT, 0);  // per tet: the log barrier (1) or the penalty (0) below det F = eps
   // Energy and inverted-tet count of a pose; always refreshes the per-tet state (a rejected trial's
   // state is overwritten by the next trial, an accepted one's is the state of the new iterate).
   auto evaluate = [&](const Points& x, int& inverted) {
@@ -338,7 +326,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         const double J = sigma.prod();
         if (J <= 0.0) ++localCount;
         double p, stiffness;
-        localEnergy += rt.volume * (mu * (sigma - Vec3::Ones()).squaredNorm() + volumeTerm(J, p, stiffness));
+        localEnergy += rt.volume * (mu * (sigma - Vec3::Ones()).squaredNorm() + volumeTerm(J, barrier[t] != 0, p, stiffness));
         state[t] = TetState{U, V, sigma};
         if (nRegions > 0 && region[t] >= 0) localRegion[std::size_t(region[t])] += rt.volume * J;
       }
@@ -373,7 +361,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       for (std::size_t t = b; t < e; ++t) {
         const Vec3& s = state[t].sigma;
         double pressure, stiffness;
-        volumeTerm(s.prod(), pressure, stiffness);
+        volumeTerm(s.prod(), barrier[std::size_t(t)] != 0, pressure, stiffness);
         if (nRegions > 0 && region[t] >= 0) pressure += regionPressure[std::size_t(region[t])];
         const Vec3 cofS(s(1) * s(2), s(0) * s(2), s(0) * s(1));  // cof F = U diag(cofS) V^T
         TetHessian& h = hessian[t];
@@ -426,7 +414,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
           const TetHessian& h = hessian[std::size_t(t)];
           const Vec3& s = st.sigma;
           double pressure, stiffness;
-          volumeTerm(s.prod(), pressure, stiffness);
+          volumeTerm(s.prod(), barrier[std::size_t(t)] != 0, pressure, stiffness);
           const int r = nRegions > 0 ? region[std::size_t(t)] : -1;
           if (r >= 0) pressure += regionPressure[std::size_t(r)];
           const Vec3 cofS(s(1) * s(2), s(0) * s(2), s(0) * s(1));
@@ -477,6 +465,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   Eigen::VectorXd step(n);
   double firstNorm = -1.0;
   auto newton = [&](int maxIterations) {
+    if (options.inversionBarrier && volumeTerm.kappa > 0) {  // the barrier guards the tets positive now
+      for (std::size_t t = 0; t < nT; ++t) barrier[t] = state[t].sigma.prod() > 0.0;
+      energy = evaluate(posed, inverted);
+    }
     for (int it = 0; it < maxIterations; ++it) {
       const auto assemblyStart = std::chrono::steady_clock::now();
       assemble();

@@ -33,13 +33,11 @@ struct CorotationalOptions {
   Preconditioner preconditioner = TwoLevel;
   /// TwoLevel: target nodes per aggregate. Larger: a smaller coarse matrix, more CG iterations.
   int coarseAggregateSize = 200;
-  /// TwoLevel: solves with a looser relative tolerance than this (FixedCorotated's first Newton
-  /// iterations, whose forcing term is at its cap of 0.1) use block Jacobi alone. Far from the
-  /// minimum a truncated block-Jacobi CG moves the nodes locally, which the line search needs: a
-  /// coarse-corrected step follows the projected Hessian's flat global modes, and Newton then takes
-  /// more iterations (small phantom: 14 instead of 9). Once the tolerance tightens, the coarse space
-  /// saves most of the CG iterations.
-  double twoLevelBelowTolerance = 0.06;
+  /// TwoLevel: solves with a looser relative tolerance than this use block Jacobi alone (a truncated
+  /// block-Jacobi CG moves the nodes locally). With the inversion barrier, FixedCorotated's loose
+  /// first Newton steps also gain from the coarse space (tiny phantom, squat frame: 34 Newton steps
+  /// instead of 45), so by default every solve is two-level.
+  double twoLevelBelowTolerance = 1.0;
 
   /// Linear: linearized corotational elasticity (Mueller & Gross), outerIterations solves; its
   /// volume is only kept to first order (sum of the principal stretches, not their product).
@@ -64,6 +62,14 @@ struct CorotationalOptions {
   /// (all but the most compressed) untouched. 0 turns it off.
   double inversionPenalty = 10.0;
   double inversionThreshold = 0.1;
+  /// FixedCorotated: tets that are positive when a Newton run starts (all but those the skinning or
+  /// a fold left inverted) get, in place of that penalty, the clamped log barrier
+  ///   inversionPenalty * lambda * b(det F),  b(J) = -(J - t)^2 ln(J / t) below J = t = inversionThreshold
+  /// (C2 at t, infinite at J = 0; Li et al. 2020). The penalty's finite stiffness lets Newton's step
+  /// aim through det F = 0, and the line search, which refuses new inversions, then cuts the whole
+  /// step until it stalls far from the minimum; the barrier's growing stiffness turns the step
+  /// itself away from inversion. Tets inverted at the start keep the penalty, which is finite there.
+  bool inversionBarrier = true;
   /// FixedCorotated: optional volume regions, one entry per tet (0 .. #tets - 1: the tet's region, -1: none;
   /// empty: no region term). Each region r adds the energy
   ///   regionVolumeStiffness * lambda / 2 * V_r0 (V_r / V_r0 - 1)^2
