@@ -106,6 +106,7 @@ int vtkReposeCorotationalRelax::RequestData(
     options.stepTolerance = this->StepTolerance;
     options.energyTolerance = this->EnergyTolerance;
     options.regionVolumeStiffness = this->RegionVolumeStiffness;
+    options.inversionBarrier = this->InversionBarrier;
     // Segments need the rest mesh's weights; without them the whole body is one region.
     if (this->VolumeRegions == 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
     {

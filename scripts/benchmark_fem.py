@@ -4,7 +4,8 @@ and peak memory of the corotational relaxation on the built-in phantoms, per lin
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark_fem.py
        [--sizes small,medium] [--solvers block,twolevel,jacobi,ic,cholmod] [--models fixed,linear]
-       [--volumes segments,body,none] [--repose build/bin/repose] [--work DIR] [--angle DEG]
+       [--volumes segments,body,none] [--guards barrier,penalty] [--repose build/bin/repose] [--work DIR]
+       [--angle DEG]
 Each (size, model, solver) runs in its own process so that its peak resident memory is its own; the
 "skin only" row is the same process without the relaxation (the memory the FEM adds is the difference).
 Prints a Markdown table."""
@@ -26,6 +27,7 @@ os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (os.environ.get("PYTHONPAT
 SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2, "block": 3, "twolevel": 4}
 MODELS = {"linear": 0, "fixed": 1}
 VOLUMES = {"none": 0, "body": 1, "segments": 2}
+GUARDS = {"penalty": 0, "barrier": 1}
 
 
 def pose_json(angle):
@@ -37,7 +39,7 @@ def pose_json(angle):
         "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}})
 
 
-def child(case, model, solver, angle, volume):
+def child(case, model, solver, angle, volume, barrier=1):
     """Skins the case to the pose, then relaxes it (model/solver < 0: skinning only); prints one JSON line."""
     from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
     from repose import vtkReposeCorotationalRelax, vtkReposeSkinning
@@ -61,6 +63,7 @@ def child(case, model, solver, angle, volume):
         fem.SetModel(model)
         fem.SetPreconditioner(solver)
         fem.SetVolumeRegions(volume)
+        fem.SetInversionBarrier(bool(barrier))
         fem.SetMaxIterations(20000)
         t = time.perf_counter()
         fem.Update()
@@ -80,9 +83,9 @@ def child(case, model, solver, angle, volume):
     print("@@" + json.dumps(result))
 
 
-def run_child(case, model, solver, angle, volume=2):
+def run_child(case, model, solver, angle, volume=2, barrier=1):
     p = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", case, str(model), str(solver), str(angle),
-                        str(volume)],
+                        str(volume), str(barrier)],
                        capture_output=True, text=True)
     m = re.search(r"^@@(.*)$", p.stdout, re.M)
     if p.returncode != 0 or not m:
@@ -92,13 +95,15 @@ def run_child(case, model, solver, angle, volume=2):
 
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
-        child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), int(sys.argv[6]))
+        child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), int(sys.argv[6]),
+              int(sys.argv[7]) if len(sys.argv) > 7 else 1)
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
     ap.add_argument("--solvers", default="twolevel,block")
     ap.add_argument("--models", default="fixed")
     ap.add_argument("--volumes", default="segments", help="region volume terms of the fixed-corotated model")
+    ap.add_argument("--guards", default="barrier", help="inversion guard of the fixed-corotated model: barrier, penalty")
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")
     ap.add_argument("--angle", type=float, default=45.0, help="hip/knee/shoulder/elbow angle of the pose (degrees)")
@@ -120,11 +125,14 @@ def main():
             sys.exit(f"{size}: skinning failed: {err}")
         rows.append((size, "skin only", "", "", base, ""))
         for model in args.models.split(","):
-            for volume in args.volumes.split(",") if model == "fixed" else ["none"]:
-                for solver in args.solvers.split(","):
-                    r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume])
-                    rows.append((size, model, volume, solver, r or base, err))
-                    print(f"{size} {model} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
+            for guard in args.guards.split(",") if model == "fixed" else ["barrier"]:
+                label = model if guard == "barrier" else f"{model} ({guard})"
+                for volume in args.volumes.split(",") if model == "fixed" else ["none"]:
+                    for solver in args.solvers.split(","):
+                        r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume],
+                                           GUARDS[guard])
+                        rows.append((size, label, volume, solver, r or base, err))
+                        print(f"{size} {label} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
     print("| size | nodes | tets | model | regions | solver | FEM s / pose | assembly s | solves s | untangle s |"
           " Newton its | CG its | inverted before -> after (only bone nodes) | volume ratio | peak MiB |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
