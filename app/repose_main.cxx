@@ -44,6 +44,7 @@
 #include "pose.h"
 #include "render_snapshot.h"
 #include "repose_pipeline.h"
+#include "vtkReposeCorotationalRelax.h"
 #include "skeleton.h"
 #include "voxelize_command.h"
 
@@ -185,7 +186,10 @@ const char* kPoseUsage =
     "                          (default: nonlinear, Newton with a line search that never adds inverted tets) or\n"
     "                          linear (faster, volume kept to first order; --relax-iterations N outer iterations);\n"
     "                          --relax-volume segments (default: each body segment also keeps its volume as a\n"
-    "                          whole, against the volumetric locking of linear tets), body or none (the paper's)\n"
+    "                          whole, against the volumetric locking of linear tets), body or none (the paper's);\n"
+    "                          --relax-continuation if-inverted (default: when tets stay inverted, a fold Newton\n"
+    "                          cannot leave, the pose is solved again from the rest shape along rigid bone paths,\n"
+    "                          with no tet inverted on the way; slower), never or always\n"
     "  --compare M,M,...       fidelity.csv and fidelity.png: body and per-label volume ratios, inverted tets and\n"
     "                          |det F - 1| for each of lbs, dqs, lbs+fem, dqs+fem\n";
 
@@ -196,7 +200,8 @@ const char* kAnimateUsage =
     "                      [--no-root-motion] [--unit-mm MM]\n"
     "  Retargets every selected frame of the clip onto the case's skeleton and writes the posed mesh and\n"
     "  surfaces per frame (DIR/frames/), DIR/animation.pvd (open it in ParaView) and DIR/frames.csv (per\n"
-    "  frame: body volume ratio, posing time and, with --volumes, each label's voxel-count ratio).\n"
+    "  frame: body volume ratio, posing time, with --volumes each label's voxel-count ratio, and with --relax\n"
+    "  the FEM's time, Newton and CG iterations, inverted tets and continuation steps).\n"
     "  --map FILE        JSON {BVH joint: skeleton joint}; default: CMU names onto the standard joint names\n"
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
@@ -433,10 +438,16 @@ struct FidelityReport {
 void requireDisplay(int argc, char** argv, const char* why);
 
 void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
-  pipeline.setRelaxationVolume(o.get("relax-volume", "segments"));  // also for the +fem methods of --compare
+  // Regions and continuation also serve the +fem methods of --compare.
+  pipeline.setRelaxationVolume(o.get("relax-volume", "segments"));
+  const std::string continuation = o.get("relax-continuation", "if-inverted");
+  if (continuation != "if-inverted" && continuation != "never" && continuation != "always")
+    throw UsageError("--relax-continuation must be if-inverted, never or always");
+  pipeline.setRelaxationContinuation(continuation);
   if (!o.has("relax")) {
-    if (o.has("relax-iterations") || o.has("poisson") || o.has("relax-model") || (o.has("relax-volume") && !o.has("compare")))
-      throw UsageError("--relax-model, --relax-iterations, --relax-volume and --poisson need --relax");
+    if (o.has("relax-iterations") || o.has("poisson") || o.has("relax-model") ||
+        ((o.has("relax-volume") || o.has("relax-continuation")) && !o.has("compare")))
+      throw UsageError("--relax-model, --relax-iterations, --relax-volume, --relax-continuation and --poisson need --relax");
     return;
   }
   const std::string model = o.get("relax-model", "fixed-corotated");
@@ -662,6 +673,8 @@ int runAnimate(const Options& o, int argc, char** argv) {
   std::ostringstream csv;
   csv << "frame,time_s,body_volume_ratio,posing_ms";
   for (const auto& [label, count] : restCounts) csv << ",label_" << label << "_ratio";
+  const bool relaxing = o.has("relax");
+  if (relaxing) csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps";
   csv << "\n";
   int written = 0;
   double totalPosing = 0, worstPosing = 0;
@@ -707,6 +720,12 @@ int runAnimate(const Options& o, int argc, char** argv) {
       std::snprintf(name, sizeof(name), "frames/image_%05d", f);
       repose::writeImage(image, out.stage(name + imageExt));
     }
+    if (vtkReposeCorotationalRelax* relax = relaxing ? pipeline.relaxation() : nullptr)
+      csv << "," << relax->GetLastRelaxTime() << ","
+          << relax->GetNewtonIterations() << ","
+          << relax->GetCGIterations() << ","
+          << relax->GetInvertedAfter() << ","
+          << relax->GetContinuationSteps();
     csv << "\n";
     ++written;
     if (written % 10 == 0) std::cout << "animate: " << written << " frames..." << std::endl;
@@ -823,7 +842,8 @@ int main(int argc, char** argv) {
                                 none));
     if (command == "pose")
       return runPose(Options(argc, argv, 2,
-                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model", "relax-volume", "poisson",
+                             {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model", "relax-volume",
+                              "relax-continuation", "poisson",
                               "compare", "mesh"},
                              {"relax"}),
                      argc, argv);
@@ -838,7 +858,8 @@ int main(int argc, char** argv) {
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image", "relax-iterations", "relax-model", "relax-volume", "poisson", "compare", "mesh"},
+                                 "unit-mm", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation", "poisson",
+                                 "compare", "mesh"},
                                 {"volumes", "no-root-motion", "relax"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");

@@ -2,9 +2,11 @@
 
 #include <chrono>
 #include <cmath>
+#include <initializer_list>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <json/json.h>
 
@@ -528,11 +530,13 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
       relax_ = vtkSmartPointer<vtkReposeCorotationalRelax>::New();
       relax_->SetInputConnection(0, skinning_->GetOutputPort());
       relax_->SetInputData(1, restMesh_);
+      relax_->SetSkeletonJSON(skeletonJson_.c_str());
     }
     relax_->SetPoissonRatio(poisson);
     relax_->SetOuterIterations(outerIterations);
     relax_->SetModel(relaxModel_);
     relax_->SetVolumeRegions(relaxVolume_);
+    relax_->SetContinuation(relaxContinuation_);
   } else {
     relax_ = nullptr;
   }
@@ -542,27 +546,34 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
   if (imageResampler_) imageResampler_->SetInputConnection(2, port);
 }
 
+namespace {
+// The number a word stands for among the choices of a setting; names the setting and the words otherwise.
+int choice(const std::string& word, std::initializer_list<std::pair<const char*, int>> choices, const char* setting) {
+  std::string expected;
+  for (const auto& [name, value] : choices) {
+    if (word == name) return value;
+    expected += (expected.empty() ? "" : ", ") + std::string(name);
+  }
+  throw std::runtime_error("unknown " + std::string(setting) + " '" + word + "' (expected " + expected + ")");
+}
+}  // namespace
+
 void Pipeline::setRelaxationModel(const std::string& model) {
-  if (model == "fixed-corotated" || model == "fixed")
-    relaxModel_ = 1;
-  else if (model == "linear")
-    relaxModel_ = 0;
-  else
-    throw std::runtime_error("unknown relaxation model '" + model + "' (expected fixed-corotated or linear)");
+  relaxModel_ = choice(model, {{"fixed-corotated", 1}, {"fixed", 1}, {"linear", 0}}, "relaxation model");
   if (relax_) relax_->SetModel(relaxModel_);
 }
 
 void Pipeline::setRelaxationVolume(const std::string& regions) {
-  if (regions == "none")
-    relaxVolume_ = 0;
-  else if (regions == "body")
-    relaxVolume_ = 1;
-  else if (regions == "segments")
-    relaxVolume_ = 2;
-  else
-    throw std::runtime_error("unknown relaxation volume regions '" + regions + "' (expected segments, body or none)");
+  relaxVolume_ = choice(regions, {{"segments", 2}, {"body", 1}, {"none", 0}}, "relaxation volume regions");
   if (relax_) relax_->SetVolumeRegions(relaxVolume_);
 }
+
+void Pipeline::setRelaxationContinuation(const std::string& mode) {
+  relaxContinuation_ = choice(mode, {{"if-inverted", 1}, {"never", 0}, {"always", 2}}, "relaxation continuation");
+  if (relax_) relax_->SetContinuation(relaxContinuation_);
+}
+
+vtkReposeCorotationalRelax* Pipeline::relaxation() const { return relax_; }
 
 std::string Pipeline::relaxationSummary() const {
   if (!relax_) return "";
@@ -577,8 +588,13 @@ std::string Pipeline::relaxationSummary() const {
           : std::string())
     << (relax_->GetUntangledNodes() > 0 ? ", " + std::to_string(relax_->GetUntangledNodes()) + " nodes untangled"
                                         : std::string())
+    << (relax_->GetContinuationSteps() > 0
+          ? std::string(", fold-free continuation ") + std::to_string(relax_->GetContinuationSteps()) + " steps " +
+              (relax_->GetContinuationUsed() ? "(kept)" : "(not kept)")
+          : std::string())
     << ", " << relax_->GetLastRelaxTime() << " s (assembly " << relax_->GetLastAssemblyTime() << " s, solves "
-    << relax_->GetLastSolveTime() << " s, untangling " << relax_->GetLastUntangleTime() << " s)";
+    << relax_->GetLastSolveTime() << " s, untangling " << relax_->GetLastUntangleTime() << " s, continuation "
+    << relax_->GetLastContinuationTime() << " s)";
   return m.str();
 }
 

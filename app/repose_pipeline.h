@@ -98,8 +98,14 @@ public:
   /// Regions whose volume the fixed-corotated relaxation holds as a whole: "segments" (default, one
   /// per bone's segment of the body), "body" or "none" (see vtkReposeCorotationalRelax::VolumeRegions).
   void setRelaxationVolume(const std::string& regions);
+  /// When the fixed-corotated solve leaves tets inverted: "if-inverted" (default) solves again by the
+  /// fold-free continuation from the rest shape, "never" keeps the direct result, "always" uses the
+  /// continuation in every pose (see vtkReposeCorotationalRelax::Continuation).
+  void setRelaxationContinuation(const std::string& mode);
   /// One line on the last relaxation: CG iterations, residual, inverted tets before and after.
   std::string relaxationSummary() const;
+  /// The relaxation filter (its figures of the last run), or null when relaxation is off.
+  vtkReposeCorotationalRelax* relaxation() const;
   /// Optional intensity image on the rest label grid, posed with trilinear sampling.
   void setRestImage(vtkImageData* image, const std::string& imageName);
 
@@ -142,7 +148,8 @@ private:
   vtkSmartPointer<vtkReposeSkinning> skinning_;
   vtkSmartPointer<vtkReposeCorotationalRelax> relax_;  // null when relaxation is off
   int relaxModel_ = 1;                                   // vtkReposeCorotationalRelax::Model
-  int relaxVolume_ = 2;                                  // vtkReposeCorotationalRelax::VolumeRegions
+  int relaxVolume_ = 2;
+  int relaxContinuation_ = 1;                            // vtkReposeCorotationalRelax::Continuation                                  // vtkReposeCorotationalRelax::VolumeRegions
   vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;

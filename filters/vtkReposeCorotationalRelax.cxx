@@ -16,6 +16,7 @@
 #include "ReposeWeightArrays.h"
 #include "body_segments.h"
 #include "corotational_fem.h"
+#include "skeleton.h"
 
 vtkStandardNewMacro(vtkReposeCorotationalRelax);
 
@@ -37,6 +38,11 @@ repose::Points ToPoints(vtkPoints* points)
 vtkReposeCorotationalRelax::vtkReposeCorotationalRelax()
 {
   this->SetNumberOfInputPorts(2);
+}
+
+vtkReposeCorotationalRelax::~vtkReposeCorotationalRelax()
+{
+  this->SetSkeletonJSON(nullptr);
 }
 
 int vtkReposeCorotationalRelax::FillInputPortInformation(int port, vtkInformation* info)
@@ -107,6 +113,16 @@ int vtkReposeCorotationalRelax::RequestData(
     options.energyTolerance = this->EnergyTolerance;
     options.regionVolumeStiffness = this->RegionVolumeStiffness;
     options.inversionBarrier = this->InversionBarrier;
+    options.continuation = this->Continuation == 2 ? repose::CorotationalOptions::Always
+      : this->Continuation == 1                    ? repose::CorotationalOptions::IfInverted
+                                                   : repose::CorotationalOptions::Never;
+    if (this->SkeletonJSON && *this->SkeletonJSON)
+    {
+      for (const repose::Joint& joint : repose::parseSkeletonJson(this->SkeletonJSON).joints)
+      {
+        options.boneParents.push_back(joint.parent);
+      }
+    }
     // Segments need the rest mesh's weights; without them the whole body is one region.
     if (this->VolumeRegions == 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
     {
@@ -144,6 +160,9 @@ int vtkReposeCorotationalRelax::RequestData(
     this->LastAssemblyTime = report.assemblySeconds;
     this->LastSolveTime = report.solveSeconds;
     this->LastUntangleTime = report.untangleSeconds;
+    this->ContinuationSteps = report.continuationSteps;
+    this->ContinuationUsed = report.continuationUsed;
+    this->LastContinuationTime = report.continuationSeconds;
   }
   catch (const std::exception& e)
   {
@@ -171,4 +190,6 @@ void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MaxNewtonIterations: " << this->MaxNewtonIterations << "\n";
   os << indent << "StepTolerance: " << this->StepTolerance << "\n";
   os << indent << "EnergyTolerance: " << this->EnergyTolerance << "\n";
+  os << indent << "Continuation: " << this->Continuation << "\n";
+  os << indent << "SkeletonJSON: " << (this->SkeletonJSON ? "(set)" : "(none)") << "\n";
 }

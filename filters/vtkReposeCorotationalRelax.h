@@ -59,6 +59,16 @@ public:
   vtkSetMacro(InversionBarrier, bool);
   vtkGetMacro(InversionBarrier, bool);
   vtkBooleanMacro(InversionBarrier, bool);
+  /// Model 1 with the barrier: when the solve leaves a fold (inverted tets with a free node), solve
+  /// again by a fold-free continuation from the rest shape (see
+  /// repose::CorotationalOptions::continuation). 0: never, 1: if tets stay inverted (default),
+  /// 2: always.
+  vtkSetClampMacro(Continuation, int, 0, 2);
+  vtkGetMacro(Continuation, int);
+  /// Optional: the skeleton (as for vtkReposeSkinning), whose hierarchy the continuation's bone
+  /// paths follow so that joints stay together along them. Without it each bone moves on its own.
+  vtkSetStringMacro(SkeletonJSON);
+  vtkGetStringMacro(SkeletonJSON);
 
   void SetRestMeshConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
   void SetRestMeshData(vtkDataObject* mesh) { this->SetInputData(1, mesh); }
@@ -73,15 +83,19 @@ public:
   vtkGetMacro(InvertedRigidAfter, int);
   /// Node moves made by the untangling step (0 when the solve left nothing inverted).
   vtkGetMacro(UntangledNodes, int);
+  /// Steps of the fold-free continuation (0: it did not run), and whether its result was kept.
+  vtkGetMacro(ContinuationSteps, int);
+  vtkGetMacro(ContinuationUsed, bool);
   vtkGetMacro(LastRelaxTime, double);
   /// Parts of LastRelaxTime: Hessian assembly, linear solves (CG or CHOLMOD), untangling.
   vtkGetMacro(LastAssemblyTime, double);
   vtkGetMacro(LastSolveTime, double);
   vtkGetMacro(LastUntangleTime, double);
+  vtkGetMacro(LastContinuationTime, double);  ///< includes its assembly and solves
 
 protected:
   vtkReposeCorotationalRelax();
-  ~vtkReposeCorotationalRelax() override = default;
+  ~vtkReposeCorotationalRelax() override;
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
@@ -97,6 +111,11 @@ protected:
   int VolumeRegions = 2;
   double RegionVolumeStiffness = 3.0;
   bool InversionBarrier = true;
+  int Continuation = 1;
+  char* SkeletonJSON = nullptr;
+  int ContinuationSteps = 0;
+  bool ContinuationUsed = false;
+  double LastContinuationTime = 0.0;
   int CGIterations = 0;
   int NewtonIterations = 0;
   double RelativeResidual = 0;

@@ -4,8 +4,8 @@ and peak memory of the corotational relaxation on the built-in phantoms, per lin
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark_fem.py
        [--sizes small,medium] [--solvers block,twolevel,jacobi,ic,cholmod] [--models fixed,linear]
-       [--volumes segments,body,none] [--guards barrier,penalty] [--repose build/bin/repose] [--work DIR]
-       [--angle DEG]
+       [--volumes segments,body,none] [--guards barrier,penalty] [--continuations if-inverted,never,always]
+       [--repose build/bin/repose] [--work DIR] [--angle DEG]
 Each (size, model, solver) runs in its own process so that its peak resident memory is its own; the
 "skin only" row is the same process without the relaxation (the memory the FEM adds is the difference).
 Prints a Markdown table."""
@@ -28,6 +28,7 @@ SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2, "block": 3, "twolevel": 4}
 MODELS = {"linear": 0, "fixed": 1}
 VOLUMES = {"none": 0, "body": 1, "segments": 2}
 GUARDS = {"penalty": 0, "barrier": 1}
+CONTINUATIONS = {"never": 0, "if-inverted": 1, "always": 2}
 
 
 def pose_json(angle):
@@ -39,7 +40,7 @@ def pose_json(angle):
         "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}})
 
 
-def child(case, model, solver, angle, volume, barrier=1):
+def child(case, model, solver, angle, volume, barrier=1, continuation=1):
     """Skins the case to the pose, then relaxes it (model/solver < 0: skinning only); prints one JSON line."""
     from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
     from repose import vtkReposeCorotationalRelax, vtkReposeSkinning
@@ -64,13 +65,17 @@ def child(case, model, solver, angle, volume, barrier=1):
         fem.SetPreconditioner(solver)
         fem.SetVolumeRegions(volume)
         fem.SetInversionBarrier(bool(barrier))
+        fem.SetContinuation(continuation)
+        fem.SetSkeletonJSON(open(f"{case}/skeleton.json").read())
         fem.SetMaxIterations(20000)
         t = time.perf_counter()
         fem.Update()
         result.update(seconds=time.perf_counter() - t, cg=fem.GetCGIterations(), newton=fem.GetNewtonIterations(),
                       before=fem.GetInvertedBefore(), after=fem.GetInvertedAfter(),
                       rigid=fem.GetInvertedRigidAfter(), assembly=fem.GetLastAssemblyTime(),
-                      solve=fem.GetLastSolveTime(), untangle=fem.GetLastUntangleTime())
+                      solve=fem.GetLastSolveTime(), untangle=fem.GetLastUntangleTime(),
+                      continuation=fem.GetContinuationSteps() if fem.GetContinuationUsed() else -fem.GetContinuationSteps(),
+                      continuation_s=fem.GetLastContinuationTime())
         posed = fem.GetOutput()
     cells = vtk_to_numpy(rest.GetCells().GetConnectivityArray()).reshape(-1, 4)
 
@@ -83,9 +88,9 @@ def child(case, model, solver, angle, volume, barrier=1):
     print("@@" + json.dumps(result))
 
 
-def run_child(case, model, solver, angle, volume=2, barrier=1):
+def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1):
     p = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", case, str(model), str(solver), str(angle),
-                        str(volume), str(barrier)],
+                        str(volume), str(barrier), str(continuation)],
                        capture_output=True, text=True)
     m = re.search(r"^@@(.*)$", p.stdout, re.M)
     if p.returncode != 0 or not m:
@@ -96,7 +101,7 @@ def run_child(case, model, solver, angle, volume=2, barrier=1):
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
         child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), int(sys.argv[6]),
-              int(sys.argv[7]) if len(sys.argv) > 7 else 1)
+              int(sys.argv[7]), int(sys.argv[8]))
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
@@ -104,6 +109,8 @@ def main():
     ap.add_argument("--models", default="fixed")
     ap.add_argument("--volumes", default="segments", help="region volume terms of the fixed-corotated model")
     ap.add_argument("--guards", default="barrier", help="inversion guard of the fixed-corotated model: barrier, penalty")
+    ap.add_argument("--continuations", default="if-inverted",
+                    help="fold-free continuation of the fixed-corotated model: if-inverted, never, always")
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")
     ap.add_argument("--angle", type=float, default=45.0, help="hip/knee/shoulder/elbow angle of the pose (degrees)")
@@ -126,27 +133,39 @@ def main():
         rows.append((size, "skin only", "", "", base, ""))
         for model in args.models.split(","):
             for guard in args.guards.split(",") if model == "fixed" else ["barrier"]:
-                label = model if guard == "barrier" else f"{model} ({guard})"
-                for volume in args.volumes.split(",") if model == "fixed" else ["none"]:
-                    for solver in args.solvers.split(","):
-                        r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume],
-                                           GUARDS[guard])
-                        rows.append((size, label, volume, solver, r or base, err))
-                        print(f"{size} {label} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
+                for continuation in args.continuations.split(",") if model == "fixed" and guard == "barrier" else ["never"]:
+                    label = model if guard == "barrier" else f"{model} ({guard})"
+                    if model == "fixed" and continuation != "if-inverted":
+                        label += f", continuation {continuation}"
+                    for volume in args.volumes.split(",") if model == "fixed" else ["none"]:
+                        for solver in args.solvers.split(","):
+                            r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume],
+                                               GUARDS[guard], CONTINUATIONS[continuation])
+                            rows.append((size, label, volume, solver, r or base, err))
+                            print(f"{size} {label} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
     print("| size | nodes | tets | model | regions | solver | FEM s / pose | assembly s | solves s | untangle s |"
-          " Newton its | CG its | inverted before -> after (only bone nodes) | volume ratio | peak MiB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          " continuation steps (s) | Newton its | CG its | inverted before -> after (only bone nodes) | volume ratio |"
+          " peak MiB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for size, model, volume, solver, r, err in rows:
         if err:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | failed: {err} | | | | | | | | |")
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | failed: {err} | | | | | | | | | |")
         elif "seconds" not in r:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | | | | | {r['volume_ratio']:.4f} |"
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | | | | | | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")
         else:
             print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | {r['seconds']:.2f} |"
-                  f" {r['assembly']:.2f} | {r['solve']:.2f} | {r['untangle']:.2f} | {r['newton']} |"
+                  f" {r['assembly']:.2f} | {r['solve']:.2f} | {r['untangle']:.2f} | {continuation_cell(r)} | {r['newton']} |"
                   f" {r['cg']} | {r['before']} -> {r['after']} ({r['rigid']}) | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")
+
+
+def continuation_cell(r):
+    """Steps and seconds of the fold-free continuation; "not kept" when the direct result stayed."""
+    steps = r.get("continuation", 0)
+    if steps == 0:
+        return "-"
+    return f"{abs(steps)} ({r['continuation_s']:.1f} s{'' if steps > 0 else ', not kept'})"
 
 
 if __name__ == "__main__":

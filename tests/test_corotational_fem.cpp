@@ -474,6 +474,68 @@ TEST(FixedCorotatedFem, SharplyBentBarUnfoldsAndKeepsVolume) {
     if (fixed[std::size_t(i)] >= 0) EXPECT_EQ((x.row(i) - posed.row(i)).cwiseAbs().maxCoeff(), 0.0);
 }
 
+// A bar bent by 86 degrees about a hinge on its inner face (bones 0: x <= 4 and 1: x >= 8, bone 1 the
+// child), warm-started from a fold: the free nodes collapsed onto a curve. Newton and the untangling settle
+// in a local minimum with a tet turned inside out; the continuation from the rest shape gets no fold
+// on the way and ends in the minimum that a good warm start (the linear blend) reaches directly.
+TEST(FixedCorotatedFem, FoldFreeContinuationLeavesNoFoldAndFindsTheMinimum) {
+  const Box b = makeBox(12, 4, 4, 1.0);
+  std::vector<int> fixed(std::size_t(b.nodes.rows()), -1);
+  Points blended = b.nodes, folded = b.nodes;
+  const Eigen::Vector3d hinge(6, 2, 0);
+  const Eigen::Matrix3d Rend = Eigen::AngleAxisd(1.5, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (Eigen::Index i = 0; i < b.nodes.rows(); ++i) {
+    const double w = std::clamp((b.nodes(i, 0) - 4.0) / 4.0, 0.0, 1.0);
+    const Eigen::Vector3d p = b.nodes.row(i).transpose();
+    blended.row(i) = ((1 - w) * p + w * (Rend * (p - hinge) + hinge)).transpose();
+    fixed[std::size_t(i)] = w == 0.0 ? 0 : w == 1.0 ? 1 : -1;
+    const Eigen::Vector3d c(6, 2, 2);  // all free rest nodes here, then blended
+    const Eigen::Vector3d collapsed = (1 - w) * c + w * (Rend * (c - hinge) + hinge);
+    folded.row(i) = fixed[std::size_t(i)] < 0 ? Eigen::RowVector3d(collapsed.transpose()) : Eigen::RowVector3d(blended.row(i));
+  }
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
+  opt.stepTolerance = 1e-5;
+  opt.boneParents = {-1, 0};
+  auto relax = [&](const Points& start, CorotationalOptions::Continuation mode, CorotationalReport& rep) {
+    CorotationalOptions o = opt;
+    o.continuation = mode;
+    Points x = start;
+    repose::relaxCorotational(b.nodes, b.tets, fixed, x, o, &rep);
+    for (Eigen::Index i = 0; i < x.rows(); ++i)
+      if (fixed[std::size_t(i)] >= 0) EXPECT_EQ((x.row(i) - start.row(i)).cwiseAbs().maxCoeff(), 0.0);
+    return x;
+  };
+  CorotationalReport good, stuck, continued, always;
+  const Points reference = relax(blended, CorotationalOptions::Never, good);
+  ASSERT_EQ(good.invertedAfter, 0);
+  relax(folded, CorotationalOptions::Never, stuck);
+  const Points x = relax(folded, CorotationalOptions::IfInverted, continued);
+  std::printf("folded start: inverted %d -> %d, energy %.4f without the continuation; -> %d, energy %.4f in %d steps "
+              "with it; %.4f from the blend\n", stuck.invertedBefore, stuck.invertedAfter, stuck.energyAfter,
+              continued.invertedAfter, continued.energyAfter, continued.continuationSteps, good.energyAfter);
+  EXPECT_GT(stuck.invertedAfter, 0);  // the case is a fold Newton cannot leave
+  EXPECT_EQ(stuck.continuationSteps, 0);
+  EXPECT_TRUE(continued.continuationUsed);
+  EXPECT_GT(continued.continuationSteps, 0);
+  EXPECT_EQ(continued.invertedAfter, 0);
+  EXPECT_NEAR(continued.energyAfter, good.energyAfter, 1e-6 * good.energyAfter);
+  EXPECT_LT((x - reference).cwiseAbs().maxCoeff(), 1e-3);
+  // From the good warm start the continuation (forced) ends in the same minimum.
+  const Points y = relax(blended, CorotationalOptions::Always, always);
+  EXPECT_TRUE(always.continuationUsed);
+  EXPECT_EQ(always.invertedAfter, 0);
+  EXPECT_NEAR(always.energyAfter, good.energyAfter, 1e-6 * good.energyAfter);
+  EXPECT_LT((y - reference).cwiseAbs().maxCoeff(), 1e-3);
+  // Bones pushed into each other (bone 1 slid over bone 0) leave no fold-free way: the direct
+  // result is kept.
+  Points crushed = b.nodes;
+  for (Eigen::Index i = 0; i < b.nodes.rows(); ++i)
+    if (fixed[std::size_t(i)] == 1) crushed.row(i) += Eigen::RowVector3d(-6, 0, 0);
+  CorotationalReport blocked;
+  relax(crushed, CorotationalOptions::Always, blocked);
+  EXPECT_FALSE(blocked.continuationUsed);
+}
+
 TEST(CorotationalFem, BadInput) {
   const Box b = makeBox(1, 1, 1, 1.0);
   std::vector<int> fixed(b.nodes.rows(), -1);

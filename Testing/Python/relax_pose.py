@@ -4,6 +4,7 @@ skinning's inverted tets (all of them from the default DQS pose; from LBS's deep
 handful), and it brings the tissue's volume within 1 % of the rest volume, closer than plain LBS. No
 tet joins nodes fixed to two different bones (prepare frees such contact nodes), so no tet is held
 rigid across a joint."""
+import csv
 import os
 import re
 import shutil
@@ -11,7 +12,7 @@ import sys
 
 import numpy as np
 
-from repose_testing import TEMP, TESTING, TINY, Mesh, check, run
+from repose_testing import SHARED, TEMP, TESTING, TINY, Mesh, check, run
 
 failures = []
 out = os.path.join(TEMP, "relax")
@@ -33,6 +34,25 @@ m_dqs = re.search(r"inverted tets (\d+) -> (\d+)", text_dqs)
 check(m_dqs is not None and int(m_dqs.group(1)) > 0 and int(m_dqs.group(2)) == 0,
       f"DQS: inverted tets {m_dqs.group(1)} after skinning -> {m_dqs.group(2)} after relaxation", failures)
 
+# The fold-free continuation, forced: the pose solved again from the rest shape along rigid bone paths
+# ends with no tet inverted and the bone nodes where skinning put them; a bad mode is refused.
+_, text_c, _ = run("pose", "--case", f"{TINY}/case", "--pose", pose, "--relax", "--relax-continuation", "always",
+                   "--out", f"{out}/fem_continuation")
+m_c = re.search(r"inverted tets (\d+) -> (\d+).*fold-free continuation (\d+) steps \(kept\)", text_c)
+check(m_c is not None and int(m_c.group(2)) == 0,
+      "the continuation runs, is kept and leaves no tet inverted" + (f" ({m_c.group(3)} steps)" if m_c else ""), failures)
+code, _, err = run("pose", "--case", f"{TINY}/case", "--pose", pose, "--relax", "--relax-continuation", "sometimes",
+                   "--out", f"{out}/bad", check=False)
+check(code != 0 and "--relax-continuation" in err and not os.path.exists(f"{out}/bad"),
+      "an unknown --relax-continuation is refused with nothing written", failures)
+# animate --relax logs the FEM per frame in frames.csv.
+bvh = os.path.join(SHARED, "mocap", "cmu_131_01_walk.bvh")
+run("animate", "--case", f"{TINY}/case", "--bvh", bvh, "--frames", "600:601:1", "--relax", "--out", f"{out}/animate")
+row = list(csv.DictReader(open(f"{out}/animate/frames.csv")))[0]
+check(float(row["relax_s"]) > 0 and int(row["newton_iterations"]) >= 1 and int(row["cg_iterations"]) >= 1 and
+      int(row["inverted_tets"]) == 0 and int(row["continuation_steps"]) >= 0,
+      f"frames.csv logs the FEM: {row['relax_s']} s, {row['newton_iterations']} Newton, {row['cg_iterations']} CG "
+      f"iterations, {row['inverted_tets']} inverted, {row['continuation_steps']} continuation steps", failures)
 
 rest_mesh = Mesh(f"{TINY}/case/mesh.vtu")
 rest, tets = rest_mesh.points, rest_mesh.tets
@@ -62,6 +82,11 @@ print("inverted tets left, by number of bone nodes:", np.bincount(pinned[inverte
 check(np.all(signed_volumes(skinned)[pinned == 4] == signed_volumes(relaxed)[pinned == 4]),
       "tets with only bone nodes are not moved", failures)
 moved = np.abs(relaxed[fixed] - skinned[fixed]).max()
+continued = Mesh(f"{out}/fem_continuation/posed_mesh.vtu").points
+check(np.all(signed_volumes(continued)[pinned < 4] > 0), "the continuation's mesh has no inverted tet with a free node",
+      failures)
+check(np.abs(continued[fixed] - Mesh(f"{out}/fem_dqs/posed_mesh.vtu").points[fixed]).max() == 0.0,
+      "the continuation keeps the bone nodes exactly where the direct solve (and skinning) put them", failures)
 check(moved < 1e-3, f"bone nodes stay at their rigid positions (max shift {moved:.1e} mm)", failures)
 check(np.abs(relaxed[~fixed] - skinned[~fixed]).max() > 0.1, "the soft tissue moved", failures)
 v0, vl, vf = volume(rest), volume(skinned), volume(relaxed)
@@ -70,7 +95,6 @@ check(abs(vf / v0 - 1) <= 0.01 and abs(vf / v0 - 1) < abs(vl / v0 - 1), f"FEM ke
       f"better than LBS ({vf / v0:.5f} vs {vl / v0:.5f})", failures)
 # The fidelity report: one row per method, and its plot.
 run("pose", "--case", f"{TINY}/case", "--pose", pose, "--compare", "lbs,dqs,dqs+fem", "--out", f"{out}/compare")
-import csv
 rows = list(csv.DictReader(open(f"{out}/compare/fidelity.csv")))
 check([r["method"] for r in rows] == ["lbs", "dqs", "dqs+fem"] and os.path.getsize(f"{out}/compare/fidelity.png") > 1000,
       "fidelity.csv has a row per method and fidelity.png is drawn", failures)
@@ -80,5 +104,5 @@ check(abs(float(by["lbs"]["body_volume_ratio"]) - vl / v0) < 1e-6,
 check(float(by["dqs+fem"]["mean_abs_detF_minus_1"]) < float(by["dqs"]["mean_abs_detF_minus_1"]),
       f"FEM lowers the mean |det F - 1| ({by['dqs']['mean_abs_detF_minus_1']} -> {by['dqs+fem']['mean_abs_detF_minus_1']})",
       failures)
-print(f"{13 - len(failures)} passed, {len(failures)} failed")
+print(f"{18 - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)

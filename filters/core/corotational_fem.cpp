@@ -16,6 +16,7 @@
 #include <string>
 
 #include "blas_threads.h"
+#include "bone_path.h"
 #include "block_sparse_cg.h"
 #include "parallel_for.h"
 #include "signed_svd.h"
@@ -300,6 +301,9 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     solver.setLowRank(&regionCoupling);
   }
 
+  std::vector<char> hasFree(nT, 0);  // per tet: some node of it is free
+  for (std::size_t t = 0; t < nT; ++t)
+    for (int a = 0; a < 4; ++a) hasFree[t] = hasFree[t] || fixedBone[std::size_t(tets(Eigen::Index(t), a))] < 0;
   std::vector<TetState> state(nT);
   std::vector<char> barrier(nT, 0);  // per tet: the log barrier (1) or the penalty (0) below det F = eps
   // Energy and inverted-tet count of a pose; always refreshes the per-tet state (a rejected trial's
@@ -391,9 +395,12 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     }, 1024);
   };
 
-  // Gradient and projected Hessian, row-wise over the free nodes (no write conflicts).
-  Eigen::VectorXd grad(n);
-  auto assemble = [&]() {
+  // Gradient and projected Hessian, row-wise over the free nodes (no write conflicts). With a move of
+  // the Dirichlet nodes (#V by 3, read at Dirichlet nodes only), also dirichletForce = H_fd move:
+  // the first-order change of the free nodes' gradient when the Dirichlet nodes take that move.
+  Eigen::VectorXd grad(n), dirichletForce;
+  auto assemble = [&](const Points* dirichletMove) {
+    if (dirichletMove) dirichletForce.setZero(n);
     prepareHessians();
     double* values = A.valuePtr();
     const int* outerIdx = A.outerIndexPtr();
@@ -402,7 +409,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         const int rowLen = (outerIdx[3 * i + 1] - outerIdx[3 * i]) / 3;
         double* v0 = values + outerIdx[3 * i];
         std::fill(v0, v0 + 9 * rowLen, 0.0);
-        Vec3 gi = Vec3::Zero();
+        Vec3 gi = Vec3::Zero(), fi = Vec3::Zero();
         const int couplingBegin = nRegions > 0 ? regionCoupling.rowStart[i] : 0;
         const int couplingEnd = nRegions > 0 ? regionCoupling.rowStart[i + 1] : 0;
         for (int q = couplingBegin; q < couplingEnd; ++q)
@@ -432,7 +439,8 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
           gi += rt.volume * (st.U * (2.0 * mu * (s - Vec3::Ones()) + pressure * cofS).cwiseProduct(wa));
           for (int bb = 0; bb < 4; ++bb) {
             const int v = tets(t, bb);
-            if (fixedBone[std::size_t(v)] >= 0) continue;  // Dirichlet: no increment
+            const bool dirichlet = fixedBone[std::size_t(v)] >= 0;
+            if (dirichlet && !dirichletMove) continue;  // Dirichlet: no increment
             // Block (a, bb) in the frame of U: diag(wa) S diag(wb) plus the twist / flip pairs.
             const Vec3 wb = w.col(bb);
             Mat3 L;
@@ -446,6 +454,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
               L(pj, pi) += double(h.d[m]) * wa(pi) * wb(pj);
             }
             const Mat3 block = rt.volume * (st.U * L * st.U.transpose());
+            if (dirichlet) {
+              fi += block * node(*dirichletMove, v);
+              continue;
+            }
             const std::size_t off = incColumn[4 * std::size_t(k) + std::size_t(bb)];
             for (int cc = 0; cc < 3; ++cc) {
               double* vc = v0 + 3 * cc * rowLen + off;
@@ -454,6 +466,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
           }
         }
         grad.segment<3>(Eigen::Index(3 * i)) = gi;
+        if (dirichletMove) dirichletForce.segment<3>(Eigen::Index(3 * i)) = fi;
       }
     }, 256);
   };
@@ -466,12 +479,14 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   double firstNorm = -1.0;
   auto newton = [&](int maxIterations) {
     if (options.inversionBarrier && volumeTerm.kappa > 0) {  // the barrier guards the tets positive now
-      for (std::size_t t = 0; t < nT; ++t) barrier[t] = state[t].sigma.prod() > 0.0;
+      // (Not on tets of Dirichlet nodes only: their energy is a constant of the solve, and a bone
+      // move of the continuation may turn them.)
+      for (std::size_t t = 0; t < nT; ++t) barrier[t] = hasFree[t] && state[t].sigma.prod() > 0.0;
       energy = evaluate(posed, inverted);
     }
     for (int it = 0; it < maxIterations; ++it) {
       const auto assemblyStart = std::chrono::steady_clock::now();
-      assemble();
+      assemble(nullptr);
       rep.assemblySeconds += seconds(assemblyStart);
       const double gradNorm = grad.norm();
       if (firstNorm < 0) firstNorm = gradNorm;
@@ -547,6 +562,95 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     }
     newton(std::max(1, options.maxNewtonIterations / 2));
   }
+  // Fold-free continuation (see CorotationalOptions::continuation).
+  auto invertedWithFreeNode = [&](const Points& x) {
+    std::atomic<int> count{0};
+    parallelFor(nT, [&](std::size_t b, std::size_t e) {
+      int local = 0;
+      for (std::size_t t = b; t < e; ++t) {
+        if (!hasFree[t]) continue;
+        const auto T = tets.row(Eigen::Index(t));
+        if (tetVolume(node(x, T[0]), node(x, T[1]), node(x, T[2]), node(x, T[3])) <= 0.0) ++local;
+      }
+      count += local;
+    });
+    return count.load();
+  };
+  const int directInverted = invertedWithFreeNode(posed);
+  if (options.inversionBarrier && volumeTerm.kappa > 0 &&
+      (options.continuation == CorotationalOptions::Always ||
+       (options.continuation == CorotationalOptions::IfInverted && directInverted > 0))) {
+    const auto continuationStart = std::chrono::steady_clock::now();
+    const Points direct = posed;
+    const bool directConverged = rep.converged;
+    const std::vector<char> directBarrier = barrier;
+    const BonePath path(rest, direct, fixedBone, options.boneParents);
+    std::vector<int> pathNodes;  // the Dirichlet nodes of the tets
+    {
+      std::vector<char> seen(std::size_t(posed.rows()), 0);
+      for (std::size_t t = 0; t < nT; ++t)
+        for (int a = 0; a < 4; ++a) {
+          const int v = tets(Eigen::Index(t), a);
+          if (fixedBone[std::size_t(v)] >= 0 && !seen[std::size_t(v)]) {
+            seen[std::size_t(v)] = 1;
+            pathNodes.push_back(v);
+          }
+        }
+    }
+    // s = 0: the rest shape under the skeleton's global rigid motion; no tet is inverted there.
+    for (int v : freeNodes) posed.row(v) = path.start(node(rest, v)).transpose();
+    path.place(0.0, pathNodes, posed);
+    trial = posed;
+    Points move = Points::Zero(posed.rows(), 3);
+    Eigen::VectorXd predictor(n);
+    double s = 0.0, ds = 0.125;
+    while (s < 1.0 && rep.continuationSteps < options.maxContinuationSteps) {
+      ++rep.continuationSteps;
+      const double target = std::min(1.0, s + ds);
+      path.place(target, pathNodes, move);
+      for (int v : pathNodes) move.row(v) -= posed.row(v);
+      energy = evaluate(posed, inverted);
+      const auto assemblyStart = std::chrono::steady_clock::now();
+      assemble(&move);
+      rep.assemblySeconds += seconds(assemblyStart);
+      // Predictor: the free nodes' response to the bone move (and to what is left of the gradient).
+      const auto solveStart = std::chrono::steady_clock::now();
+      predictor.setZero();
+      int iterations = 0;
+      double residual = 0.0;
+      solver.solve(A, -(grad + dirichletForce), predictor, 1e-2, iterations, residual);
+      rep.solveSeconds += seconds(solveStart);
+      // The largest fraction of the step (halved from 1) that leaves every tet positive.
+      double alpha = 1.0;
+      bool accepted = false;
+      for (int halving = 0; halving < 16; ++halving, alpha *= 0.5) {
+        path.place(s + alpha * (target - s), pathNodes, trial);
+        for (std::size_t i = 0; i < nFree; ++i)
+          trial.row(freeNodes[i]) = posed.row(freeNodes[i]) + alpha * predictor.segment<3>(Eigen::Index(3 * i)).transpose();
+        accepted = invertedWithFreeNode(trial) == 0;
+        if (accepted) break;
+      }
+      if (!accepted) break;
+      s = alpha == 1.0 ? target : s + alpha * (target - s);
+      posed = trial;
+      ds = alpha == 1.0 ? std::min(2.0 * ds, 0.5) : alpha * ds;
+      if (ds < 1e-6) break;  // the bones press tissue to nothing: no fold-free way on
+      energy = evaluate(posed, inverted);
+      firstNorm = -1.0;  // each correction's forcing terms start afresh
+      newton(s < 1.0 ? options.continuationCorrections : options.maxNewtonIterations);
+    }
+    // Newton never inverts a tet, so a completed path ends fold-free.
+    const bool completed = s >= 1.0;
+    if (completed && (options.continuation == CorotationalOptions::Always || invertedWithFreeNode(posed) < directInverted)) {
+      rep.continuationUsed = true;
+    } else {
+      posed = direct;
+      barrier = directBarrier;
+      energy = evaluate(posed, inverted);
+      rep.converged = directConverged;
+    }
+    rep.continuationSeconds = seconds(continuationStart);
+  }
   rep.energyAfter = energy;  // regionVolume is that of posed too: evaluate() last ran on it or on the accepted trial
   rep.regionVolumeRatio.resize(std::size_t(nRegions));
   for (int r = 0; r < nRegions; ++r)
@@ -584,6 +688,8 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     throw std::invalid_argument("relaxCorotational: twoLevelBelowTolerance must be >= 0");
   if (options.maxNewtonIterations < 1)
     throw std::invalid_argument("relaxCorotational: maxNewtonIterations must be >= 1");
+  if (options.maxContinuationSteps < 1 || options.continuationCorrections < 1)
+    throw std::invalid_argument("relaxCorotational: maxContinuationSteps and continuationCorrections must be >= 1");
   if (!(options.stepTolerance > 0.0))
     throw std::invalid_argument("relaxCorotational: stepTolerance must be positive");
   if (!(options.energyTolerance >= 0.0))
