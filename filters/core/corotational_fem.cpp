@@ -601,6 +601,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     for (int v : freeNodes) posed.row(v) = path.start(node(rest, v)).transpose();
     path.place(0.0, pathNodes, posed);
     trial = posed;
+    for (std::size_t t = 0; t < nT; ++t) barrier[t] = hasFree[t];  // every tet is positive all along
     Points move = Points::Zero(posed.rows(), 3);
     Eigen::VectorXd predictor(n);
     double s = 0.0, ds = 0.125;
@@ -634,10 +635,13 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       s = alpha == 1.0 ? target : s + alpha * (target - s);
       posed = trial;
       ds = alpha == 1.0 ? std::min(2.0 * ds, 0.5) : alpha * ds;
-      if (ds < 1e-6) break;  // the bones press tissue to nothing: no fold-free way on
+      // Steps this short: the bones press tissue to nothing (no fold-free way on), or the barrier's
+      // stiffness makes every step a crawl; the direct result stays.
+      if (ds < 1e-4) break;
       energy = evaluate(posed, inverted);
       firstNorm = -1.0;  // each correction's forcing terms start afresh
-      newton(s < 1.0 ? options.continuationCorrections : options.maxNewtonIterations);
+      if (s >= 1.0 || options.continuationCorrections > 0)
+        newton(s < 1.0 ? options.continuationCorrections : options.maxNewtonIterations);
     }
     // Newton never inverts a tet, so a completed path ends fold-free.
     const bool completed = s >= 1.0;
@@ -688,8 +692,8 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     throw std::invalid_argument("relaxCorotational: twoLevelBelowTolerance must be >= 0");
   if (options.maxNewtonIterations < 1)
     throw std::invalid_argument("relaxCorotational: maxNewtonIterations must be >= 1");
-  if (options.maxContinuationSteps < 1 || options.continuationCorrections < 1)
-    throw std::invalid_argument("relaxCorotational: maxContinuationSteps and continuationCorrections must be >= 1");
+  if (options.maxContinuationSteps < 1 || options.continuationCorrections < 0)
+    throw std::invalid_argument("relaxCorotational: maxContinuationSteps must be >= 1 and continuationCorrections >= 0");
   if (!(options.stepTolerance > 0.0))
     throw std::invalid_argument("relaxCorotational: stepTolerance must be positive");
   if (!(options.energyTolerance >= 0.0))
