@@ -605,6 +605,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     Points move = Points::Zero(posed.rows(), 3);
     Eigen::VectorXd predictor(n);
     double s = 0.0, ds = 0.125;
+    std::vector<double> sHistory;  // s after each step
     while (s < 1.0 && rep.continuationSteps < options.maxContinuationSteps) {
       ++rep.continuationSteps;
       const double target = std::min(1.0, s + ds);
@@ -635,9 +636,12 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       s = alpha == 1.0 ? target : s + alpha * (target - s);
       posed = trial;
       ds = alpha == 1.0 ? std::min(2.0 * ds, 0.5) : alpha * ds;
-      // Steps this short: the bones press tissue to nothing (no fold-free way on), or the barrier's
-      // stiffness makes every step a crawl; the direct result stays.
-      if (ds < 1e-4) break;
+      // The path stalls where bones press tissue to nothing (no fold-free way on): steps shrink and
+      // stay short. Short steps alone are no stall, as the path may squeeze through and steps grow
+      // again (tiny phantom, squat frames 372 and 388: steps below 1e-4, then the end of the path).
+      sHistory.push_back(s);
+      const std::size_t window = 20;
+      if (ds < 1e-6 || (sHistory.size() > window && s - sHistory[sHistory.size() - 1 - window] < 1e-3)) break;
       energy = evaluate(posed, inverted);
       firstNorm = -1.0;  // each correction's forcing terms start afresh
       if (s >= 1.0 || options.continuationCorrections > 0)
