@@ -572,6 +572,14 @@ TEST(CorotationalFem, BadInput) {
   o2.coarseAggregateSize = 0;
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
   o2 = CorotationalOptions{};
+  o2.maxContinuationSteps = 0;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
+  o2 = CorotationalOptions{};
+  std::vector<int> twoBones = fixed;
+  twoBones[1] = 1;
+  o2.boneParents = {-1};  // bone 1 has no parent entry
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, twoBones, posed, o2), std::invalid_argument);
+  o2 = CorotationalOptions{};
   o2.twoLevelBelowTolerance = -1;
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
   // No fixed node: singular.

@@ -47,11 +47,13 @@ Mat3 robustRotation(const Mat3& F) {
   return U * V.transpose();
 }
 
-int countInverted(const Points& P, const Tets& tets) {
+/// Tets with signed volume <= 0; with `only`, among the tets it flags.
+int countInverted(const Points& P, const Tets& tets, const std::vector<char>* only = nullptr) {
   std::atomic<int> count{0};
   parallelFor(std::size_t(tets.rows()), [&](std::size_t b, std::size_t e) {
     int local = 0;
     for (std::size_t t = b; t < e; ++t) {
+      if (only && !(*only)[t]) continue;
       const auto T = tets.row(Eigen::Index(t));
       if (tetVolume(node(P, T[0]), node(P, T[1]), node(P, T[2]), node(P, T[3])) <= 0.0) ++local;
     }
@@ -563,19 +565,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     newton(std::max(1, options.maxNewtonIterations / 2));
   }
   // Fold-free continuation (see CorotationalOptions::continuation).
-  auto invertedWithFreeNode = [&](const Points& x) {
-    std::atomic<int> count{0};
-    parallelFor(nT, [&](std::size_t b, std::size_t e) {
-      int local = 0;
-      for (std::size_t t = b; t < e; ++t) {
-        if (!hasFree[t]) continue;
-        const auto T = tets.row(Eigen::Index(t));
-        if (tetVolume(node(x, T[0]), node(x, T[1]), node(x, T[2]), node(x, T[3])) <= 0.0) ++local;
-      }
-      count += local;
-    });
-    return count.load();
-  };
+  auto invertedWithFreeNode = [&](const Points& x) { return countInverted(x, tets, &hasFree); };
   const int directInverted = invertedWithFreeNode(posed);
   if (options.inversionBarrier && volumeTerm.kappa > 0 &&
       (options.continuation == CorotationalOptions::Always ||
@@ -722,6 +712,12 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
         throw std::invalid_argument("relaxCorotational: tet " + std::to_string(t) +
                                     " has node index " + std::to_string(tets(t, a)) +
                                     " outside [0, " + std::to_string(nV) + ")");
+  if (!options.boneParents.empty() && !fixedBone.empty()) {
+    const int bones = *std::max_element(fixedBone.begin(), fixedBone.end()) + 1;
+    if (int(options.boneParents.size()) < bones)
+      throw std::invalid_argument("relaxCorotational: boneParents has " + std::to_string(options.boneParents.size()) +
+                                  " entries but fixedBone names bone " + std::to_string(bones - 1));
+  }
   const bool anyFixed = std::any_of(fixedBone.begin(), fixedBone.end(), [](int b) { return b >= 0; });
   if (nV > 0 && !anyFixed)
     throw std::invalid_argument(
