@@ -185,8 +185,9 @@ const char* kPoseUsage =
     "                          soft tissue keeps its volume); --poisson NU (0.49); --relax-model fixed-corotated\n"
     "                          (default: nonlinear, Newton with a line search that never adds inverted tets) or\n"
     "                          linear (faster, volume kept to first order; --relax-iterations N outer iterations);\n"
-    "                          --relax-volume segments (default: each body segment also keeps its volume as a\n"
-    "                          whole, against the volumetric locking of linear tets), body or none (the paper's);\n"
+    "                          --relax-volume segments (default: each body segment also keeps its volume as a whole,\n"
+    "                          to 1e-5, against the volumetric locking of linear tets), tissues (each label within\n"
+    "                          each segment: organs keep their own volume; slower), body or none (the paper's);\n"
     "                          --relax-continuation if-inverted (default: when tets stay inverted, a fold Newton\n"
     "                          cannot leave, the pose is solved again from the rest shape along rigid bone paths,\n"
     "                          with no tet inverted on the way; slower), never or always\n"
@@ -210,6 +211,8 @@ const char* kAnimateUsage =
     "                    each joint's rotation relative to --reference-frame (default 0)\n"
     "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n"
     "  --relax           corotational FEM relaxation of every frame (see repose pose --help)\n"
+    "  --relax-start S   previous (default): each frame's FEM starts from the frame before's correction\n"
+    "                    (fewer Newton steps, coherent frames); skinned: every frame from its skinned pose alone\n"
     "  --mesh FILE       also pose this mesh per frame (see repose pose --help; repeatable): DIR/frames/<name>_NNNNN.vtp,\n"
     "                    one series per mesh in animation.pvd\n"
     "  --compare M,...   per frame and method (lbs, dqs, lbs+fem, dqs+fem): fidelity.csv and fidelity.png\n";
@@ -624,9 +627,14 @@ int runAnimate(const Options& o, int argc, char** argv) {
   const std::string caseDir = o.require("case");
   const std::string bvhPath = o.require("bvh");
   const std::string outDir = o.require("out");
+  const std::string relaxStart = o.get("relax-start", "previous");
+  if (relaxStart != "previous" && relaxStart != "skinned") throw UsageError("--relax-start must be previous or skinned");
+  if (o.has("relax-start") && !o.has("relax") && !o.has("compare"))
+    throw UsageError("--relax-start needs --relax (or --compare with a +fem method)");
   repose::Pipeline pipeline;
   pipeline.loadCase(caseDir);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
+  pipeline.setRelaxationWarmStart(relaxStart == "previous");
   applyRelaxation(pipeline, o);
   const repose::Skeleton skeleton = repose::parseSkeletonJson(pipeline.skeletonJson());
 
@@ -674,7 +682,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
   csv << "frame,time_s,body_volume_ratio,posing_ms";
   for (const auto& [label, count] : restCounts) csv << ",label_" << label << "_ratio";
   const bool relaxing = o.has("relax");
-  if (relaxing) csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps";
+  if (relaxing) csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start";
   csv << "\n";
   int written = 0;
   double totalPosing = 0, worstPosing = 0;
@@ -725,7 +733,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
           << relax->GetNewtonIterations() << ","
           << relax->GetCGIterations() << ","
           << relax->GetInvertedAfter() << ","
-          << relax->GetContinuationSteps();
+          << relax->GetContinuationSteps() << "," << int(relax->GetWarmStarted());
     csv << "\n";
     ++written;
     if (written % 10 == 0) std::cout << "animate: " << written << " frames..." << std::endl;
@@ -859,7 +867,7 @@ int main(int argc, char** argv) {
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
                                  "unit-mm", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation", "poisson",
-                                 "compare", "mesh"},
+                                 "relax-start", "compare", "mesh"},
                                 {"volumes", "no-root-motion", "relax"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");

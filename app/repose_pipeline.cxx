@@ -410,7 +410,7 @@ void Pipeline::connectPosing() {
   labelResampler_->SetInterpolationToNearest();
   labelResampler_->SetBackgroundValue(0);
   imageResampler_ = nullptr;
-  relax_ = nullptr;
+  relax_ = relaxBySkinning_[0] = relaxBySkinning_[1] = nullptr;
 }
 
 void Pipeline::setPose(const std::string& poseJson, const std::string& poseName) {
@@ -490,6 +490,7 @@ void Pipeline::setSkinningMethod(const std::string& method) {
     skinning_->SetSkinningMethodToLinearBlend();
   else
     throw std::runtime_error("unknown skinning method '" + method + "' (use dqs or lbs)");
+  if (relax_) setRelaxation(true, relax_->GetPoissonRatio(), relax_->GetOuterIterations());  // that method's filter
 }
 
 void Pipeline::setRestImage(vtkImageData* image, const std::string& imageName) {
@@ -526,12 +527,15 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
   if (!(poisson > -1 && poisson < 0.5)) throw std::runtime_error("Poisson's ratio must be in (-1, 0.5)");
   if (outerIterations < 1) throw std::runtime_error("relaxation needs at least one iteration");
   if (enabled) {
-    if (!relax_) {
-      relax_ = vtkSmartPointer<vtkReposeCorotationalRelax>::New();
-      relax_->SetInputConnection(0, skinning_->GetOutputPort());
-      relax_->SetInputData(1, restMesh_);
-      relax_->SetSkeletonJSON(skeletonJson_.c_str());
+    vtkSmartPointer<vtkReposeCorotationalRelax>& filter = relaxBySkinning_[skinning_->GetSkinningMethod() != 0];
+    if (!filter) {
+      filter = vtkSmartPointer<vtkReposeCorotationalRelax>::New();
+      filter->SetInputConnection(0, skinning_->GetOutputPort());
+      filter->SetInputData(1, restMesh_);
+      filter->SetSkeletonJSON(skeletonJson_.c_str());
     }
+    relax_ = filter;
+    relax_->SetWarmStart(relaxWarmStart_);
     relax_->SetPoissonRatio(poisson);
     relax_->SetOuterIterations(outerIterations);
     relax_->SetModel(relaxModel_);
@@ -564,13 +568,19 @@ void Pipeline::setRelaxationModel(const std::string& model) {
 }
 
 void Pipeline::setRelaxationVolume(const std::string& regions) {
-  relaxVolume_ = choice(regions, {{"segments", 2}, {"body", 1}, {"none", 0}}, "relaxation volume regions");
+  relaxVolume_ = choice(regions, {{"tissues", 3}, {"segments", 2}, {"body", 1}, {"none", 0}}, "relaxation volume regions");
   if (relax_) relax_->SetVolumeRegions(relaxVolume_);
 }
 
 void Pipeline::setRelaxationContinuation(const std::string& mode) {
   relaxContinuation_ = choice(mode, {{"if-inverted", 1}, {"never", 0}, {"always", 2}}, "relaxation continuation");
   if (relax_) relax_->SetContinuation(relaxContinuation_);
+}
+
+void Pipeline::setRelaxationWarmStart(bool enabled) {
+  relaxWarmStart_ = enabled;
+  for (auto& filter : relaxBySkinning_)
+    if (filter) filter->SetWarmStart(enabled);
 }
 
 vtkReposeCorotationalRelax* Pipeline::relaxation() const { return relax_; }

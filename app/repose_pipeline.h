@@ -96,12 +96,17 @@ public:
   /// (one linearised corotational solve per outer iteration: faster, volume kept to first order).
   void setRelaxationModel(const std::string& model);
   /// Regions whose volume the fixed-corotated relaxation holds as a whole: "segments" (default, one
-  /// per bone's segment of the body), "body" or "none" (see vtkReposeCorotationalRelax::VolumeRegions).
+  /// per bone's segment of the body), "tissues" (each label within each segment), "body" or "none"
+  /// (see vtkReposeCorotationalRelax::VolumeRegions).
   void setRelaxationVolume(const std::string& regions);
   /// When the fixed-corotated solve leaves tets inverted: "if-inverted" (default) solves again by the
   /// fold-free continuation from the rest shape, "never" keeps the direct result, "always" uses the
   /// continuation in every pose (see vtkReposeCorotationalRelax::Continuation).
   void setRelaxationContinuation(const std::string& mode);
+  /// Each relaxation starts from the last one's correction (for a sequence of poses; see
+  /// vtkReposeCorotationalRelax::WarmStart). Kept per skinning method, so --compare's lbs+fem and
+  /// dqs+fem each follow their own history.
+  void setRelaxationWarmStart(bool enabled);
   /// One line on the last relaxation: CG iterations, residual, inverted tets before and after.
   std::string relaxationSummary() const;
   /// The relaxation filter (its figures of the last run), or null when relaxation is off.
@@ -147,9 +152,11 @@ private:
   vtkSmartPointer<vtkPolyData> restSurfaces_;
   vtkSmartPointer<vtkReposeSkinning> skinning_;
   vtkSmartPointer<vtkReposeCorotationalRelax> relax_;  // null when relaxation is off
+  vtkSmartPointer<vtkReposeCorotationalRelax> relaxBySkinning_[2];  // per vtkReposeSkinning::SkinningMethod
+  bool relaxWarmStart_ = false;
   int relaxModel_ = 1;                                   // vtkReposeCorotationalRelax::Model
   int relaxVolume_ = 2;
-  int relaxContinuation_ = 1;                            // vtkReposeCorotationalRelax::Continuation                                  // vtkReposeCorotationalRelax::VolumeRegions
+  int relaxContinuation_ = 1;                            // vtkReposeCorotationalRelax::Continuation
   vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;

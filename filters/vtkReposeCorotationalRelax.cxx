@@ -1,6 +1,7 @@
 #include "vtkReposeCorotationalRelax.h"
 
 #include "vtkCellArray.h"
+#include "vtkCellData.h"
 #include "vtkDataArray.h"
 #include "vtkIdList.h"
 #include "vtkInformation.h"
@@ -112,6 +113,7 @@ int vtkReposeCorotationalRelax::RequestData(
     options.stepTolerance = this->StepTolerance;
     options.energyTolerance = this->EnergyTolerance;
     options.regionVolumeStiffness = this->RegionVolumeStiffness;
+    options.regionVolumeTolerance = this->RegionVolumeTolerance;
     options.inversionBarrier = this->InversionBarrier;
     options.continuation = this->Continuation == 2 ? repose::CorotationalOptions::Always
       : this->Continuation == 1                    ? repose::CorotationalOptions::IfInverted
@@ -124,17 +126,40 @@ int vtkReposeCorotationalRelax::RequestData(
       }
     }
     // Segments need the rest mesh's weights; without them the whole body is one region.
-    if (this->VolumeRegions == 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
+    if (this->VolumeRegions >= 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
     {
       options.volumeRegions = repose::bodySegments(
         repose_vtk::ToSparseWeights(rest->GetPointData(), rest->GetNumberOfPoints()), tets);
+      vtkDataArray* labels = rest->GetCellData()->GetArray("Label");
+      if (this->VolumeRegions == 3 && labels && labels->GetNumberOfTuples() == nt)
+      {
+        std::vector<int> tetLabels(static_cast<std::size_t>(nt));
+        for (vtkIdType c = 0; c < nt; ++c)
+        {
+          tetLabels[static_cast<std::size_t>(c)] = static_cast<int>(labels->GetTuple1(c));
+        }
+        options.volumeRegions = repose::tissueSegments(options.volumeRegions, tetLabels);
+      }
     }
     else if (this->VolumeRegions > 0)
     {
       options.volumeRegions.assign(static_cast<std::size_t>(nt), 0);
     }
+    const vtkMTimeType restTime = rest->GetMTime();
+    if (this->WarmStart && this->Model == 1 && this->LastRestMTime == restTime &&
+      this->LastCorrection.size() == 3 * static_cast<std::size_t>(nodes.rows()))
+    {
+      options.startCorrection =
+        Eigen::Map<const repose::Points>(this->LastCorrection.data(), nodes.rows(), 3);
+    }
+    const repose::Points input = nodes;
     repose::CorotationalReport report;
+    this->LastCorrection.clear();  // a failed run leaves nothing to start from
     repose::relaxCorotational(restNodes, tets, fixedBone, nodes, options, &report);
+    this->LastCorrection.resize(3 * static_cast<std::size_t>(nodes.rows()));
+    Eigen::Map<repose::Points>(this->LastCorrection.data(), nodes.rows(), 3) = nodes - input;
+    this->LastRestMTime = restTime;
+    this->WarmStarted = report.correctedStart;
 
     output->ShallowCopy(posed);
     vtkNew<vtkPoints> points;
@@ -156,6 +181,7 @@ int vtkReposeCorotationalRelax::RequestData(
     this->InvertedAfter = report.invertedAfter;
     this->InvertedRigidAfter = report.invertedRigid;
     this->UntangledNodes = report.untangledNodes;
+    this->RegionVolumeUpdates = report.regionVolumeUpdates;
     this->LastRelaxTime = report.seconds;
     this->LastAssemblyTime = report.assemblySeconds;
     this->LastSolveTime = report.solveSeconds;

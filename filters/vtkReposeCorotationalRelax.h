@@ -9,6 +9,8 @@
 #include "ReposeFiltersModule.h"
 #include "vtkUnstructuredGridAlgorithm.h"
 
+#include <vector>
+
 class REPOSEFILTERS_EXPORT vtkReposeCorotationalRelax : public vtkUnstructuredGridAlgorithm
 {
 public:
@@ -47,12 +49,19 @@ public:
   /// Model 1: regions whose volume is held as a whole (see repose::CorotationalOptions::volumeRegions),
   /// against the volumetric locking of linear tets. 0: none (the paper's solve); 1: the whole body;
   /// 2 (default): body segments, each tet in the segment of the bone with the largest summed weight
-  /// over its nodes (needs the rest mesh's Weights and BoneIds; falls back to 1 without them).
-  vtkSetClampMacro(VolumeRegions, int, 0, 2);
+  /// over its nodes (needs the rest mesh's Weights and BoneIds; falls back to 1 without them);
+  /// 3: segments split by the tets' cell data Label, so each organ keeps its own volume within its
+  /// segment (falls back to 2 without Label). Slower, and the fold-free continuation can stall with
+  /// it (tiny phantom's test pose: 170 steps, not kept, where segments complete in 29).
+  vtkSetClampMacro(VolumeRegions, int, 0, 3);
   vtkGetMacro(VolumeRegions, int);
   /// Model 1: a region's volume stiffness, in units of the tissue's Lame lambda.
   vtkSetClampMacro(RegionVolumeStiffness, double, 0.0, 1e6);
   vtkGetMacro(RegionVolumeStiffness, double);
+  /// Model 1: each region's volume is then held to this relative tolerance by up to 4 multiplier
+  /// updates (see repose::CorotationalOptions::regionVolumeTolerance); 1 or more: the penalty alone.
+  vtkSetClampMacro(RegionVolumeTolerance, double, 0.0, 1.0);
+  vtkGetMacro(RegionVolumeTolerance, double);
   /// Model 1: the log barrier that keeps the tets positive when Newton starts from folding (default
   /// on; see repose::CorotationalOptions::inversionBarrier). Off: only the finite penalty, about
   /// twice as fast on the medium phantom, but Newton may stall short of the minimum.
@@ -69,6 +78,14 @@ public:
   /// paths follow so that joints stay together along them. Without it each bone moves on its own.
   vtkSetStringMacro(SkeletonJSON);
   vtkGetStringMacro(SkeletonJSON);
+  /// Model 1: start from the last execution's correction, the input plus (last output - last input)
+  /// on the free nodes, when the rest mesh is the same and that start has no more inverted tets
+  /// than the input (see repose::CorotationalOptions::startCorrection). For animation frames and
+  /// drags: a few Newton steps from next to the minimum, and consecutive results stay coherent.
+  /// Off (default): every pose is solved from the skinned input alone.
+  vtkSetMacro(WarmStart, bool);
+  vtkGetMacro(WarmStart, bool);
+  vtkBooleanMacro(WarmStart, bool);
 
   void SetRestMeshConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
   void SetRestMeshData(vtkDataObject* mesh) { this->SetInputData(1, mesh); }
@@ -83,9 +100,13 @@ public:
   vtkGetMacro(InvertedRigidAfter, int);
   /// Node moves made by the untangling step (0 when the solve left nothing inverted).
   vtkGetMacro(UntangledNodes, int);
+  /// Region-volume multiplier updates made (see RegionVolumeTolerance).
+  vtkGetMacro(RegionVolumeUpdates, int);
   /// Steps of the fold-free continuation (0: it did not run), and whether its result was kept.
   vtkGetMacro(ContinuationSteps, int);
   vtkGetMacro(ContinuationUsed, bool);
+  /// Whether the last execution started from the previous correction (see WarmStart).
+  vtkGetMacro(WarmStarted, bool);
   vtkGetMacro(LastRelaxTime, double);
   /// Parts of LastRelaxTime: Hessian assembly, linear solves (CG or CHOLMOD), untangling.
   vtkGetMacro(LastAssemblyTime, double);
@@ -109,10 +130,16 @@ protected:
   double StepTolerance = 0.01;
   double EnergyTolerance = 1e-3;
   int VolumeRegions = 2;
-  double RegionVolumeStiffness = 3.0;
+  double RegionVolumeStiffness = 30.0;
+  double RegionVolumeTolerance = 1e-5;
+  int RegionVolumeUpdates = 0;
   bool InversionBarrier = true;
   int Continuation = 1;
   char* SkeletonJSON = nullptr;
+  bool WarmStart = false;
+  bool WarmStarted = false;
+  std::vector<double> LastCorrection;  // last output - last input, 3 per node
+  vtkMTimeType LastRestMTime = 0;   // ... for this rest mesh
   int ContinuationSteps = 0;
   bool ContinuationUsed = false;
   double LastContinuationTime = 0.0;

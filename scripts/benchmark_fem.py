@@ -4,10 +4,13 @@ and peak memory of the corotational relaxation on the built-in phantoms, per lin
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark_fem.py
        [--sizes small,medium] [--solvers block,twolevel,jacobi,ic,cholmod] [--models fixed,linear]
-       [--volumes segments,body,none] [--guards barrier,penalty] [--continuations if-inverted,never,always]
-       [--repose build/bin/repose] [--work DIR] [--angle DEG]
+       [--volumes segments,tissues,body,none] [--guards barrier,penalty] [--continuations if-inverted,never,always]
+       [--repose build/bin/repose] [--work DIR] [--angle DEG] [--warm DEG]
 Each (size, model, solver) runs in its own process so that its peak resident memory is its own; the
 "skin only" row is the same process without the relaxation (the memory the FEM adds is the difference).
+--warm DEG adds, per row, the pose DEG degrees short of --angle solved first and the pose itself then
+warm-started from its correction (vtkReposeCorotationalRelax::WarmStart, as animate does frame to
+frame); the figures are those of the second solve.
 Prints a Markdown table."""
 import argparse
 import json
@@ -26,7 +29,7 @@ sys.path.append(_package)
 os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (os.environ.get("PYTHONPATH"), _package) if p)
 SOLVERS = {"jacobi": 0, "ic": 1, "cholmod": 2, "block": 3, "twolevel": 4}
 MODELS = {"linear": 0, "fixed": 1}
-VOLUMES = {"none": 0, "body": 1, "segments": 2}
+VOLUMES = {"none": 0, "body": 1, "segments": 2, "tissues": 3}
 GUARDS = {"penalty": 0, "barrier": 1}
 CONTINUATIONS = {"never": 0, "if-inverted": 1, "always": 2}
 
@@ -40,7 +43,7 @@ def pose_json(angle):
         "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}})
 
 
-def child(case, model, solver, angle, volume, barrier=1, continuation=1):
+def child(case, model, solver, angle, volume, barrier=1, continuation=1, warm=0.0):
     """Skins the case to the pose, then relaxes it (model/solver < 0: skinning only); prints one JSON line."""
     from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
     from repose import vtkReposeCorotationalRelax, vtkReposeSkinning
@@ -53,7 +56,7 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1):
     sk = vtkReposeSkinning()
     sk.SetInputConnection(mr.GetOutputPort())
     sk.SetSkeletonJSON(open(f"{case}/skeleton.json").read())
-    sk.SetPoseJSON(pose_json(angle))
+    sk.SetPoseJSON(pose_json(angle - warm if warm > 0 else angle))
     sk.Update()
     result = {"nodes": rest.GetNumberOfPoints(), "tets": rest.GetNumberOfCells()}
     posed = sk.GetOutput()
@@ -68,6 +71,12 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1):
         fem.SetContinuation(continuation)
         fem.SetSkeletonJSON(open(f"{case}/skeleton.json").read())
         fem.SetMaxIterations(20000)
+        if warm > 0:  # the pose before, then the pose itself from its correction
+            fem.WarmStartOn()
+            t = time.perf_counter()
+            fem.Update()
+            result["previous_seconds"] = time.perf_counter() - t
+            sk.SetPoseJSON(pose_json(angle))
         t = time.perf_counter()
         fem.Update()
         result.update(seconds=time.perf_counter() - t, cg=fem.GetCGIterations(), newton=fem.GetNewtonIterations(),
@@ -75,7 +84,7 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1):
                       rigid=fem.GetInvertedRigidAfter(), assembly=fem.GetLastAssemblyTime(),
                       solve=fem.GetLastSolveTime(), untangle=fem.GetLastUntangleTime(),
                       continuation=fem.GetContinuationSteps() if fem.GetContinuationUsed() else -fem.GetContinuationSteps(),
-                      continuation_s=fem.GetLastContinuationTime())
+                      continuation_s=fem.GetLastContinuationTime(), warm_started=fem.GetWarmStarted())
         posed = fem.GetOutput()
     cells = vtk_to_numpy(rest.GetCells().GetConnectivityArray()).reshape(-1, 4)
 
@@ -88,9 +97,9 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1):
     print("@@" + json.dumps(result))
 
 
-def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1):
+def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1, warm=0.0):
     p = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", case, str(model), str(solver), str(angle),
-                        str(volume), str(barrier), str(continuation)],
+                        str(volume), str(barrier), str(continuation), str(warm)],
                        capture_output=True, text=True)
     m = re.search(r"^@@(.*)$", p.stdout, re.M)
     if p.returncode != 0 or not m:
@@ -101,7 +110,7 @@ def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1):
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
         child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), int(sys.argv[6]),
-              int(sys.argv[7]), int(sys.argv[8]))
+              int(sys.argv[7]), int(sys.argv[8]), float(sys.argv[9]))
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
@@ -114,6 +123,8 @@ def main():
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")
     ap.add_argument("--angle", type=float, default=45.0, help="hip/knee/shoulder/elbow angle of the pose (degrees)")
+    ap.add_argument("--warm", type=float, default=0.0,
+                    help="also solve the pose this many degrees short first and warm-start from it (0: off)")
     args = ap.parse_args()
     work = args.work or tempfile.mkdtemp(prefix="repose-bench-fem-")
     rows = []
@@ -140,7 +151,13 @@ def main():
                     for volume in args.volumes.split(",") if model == "fixed" else ["none"]:
                         for solver in args.solvers.split(","):
                             r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume],
-                                               GUARDS[guard], CONTINUATIONS[continuation])
+                                               GUARDS[guard], CONTINUATIONS[continuation], args.warm)
+                            if r and args.warm > 0:
+                                label_w = f"{label}, warm from {args.angle - args.warm:g} deg"
+                                label_w += "" if r["warm_started"] else " (not taken)"
+                                label_w += f" (that pose: {r['previous_seconds']:.1f} s)"
+                                rows.append((size, label_w, volume, solver, r, err))
+                                continue
                             rows.append((size, label, volume, solver, r or base, err))
                             print(f"{size} {label} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
     print("| size | nodes | tets | model | regions | solver | FEM s / pose | assembly s | solves s | untangle s |"

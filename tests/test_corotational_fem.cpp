@@ -13,6 +13,7 @@
 
 #include "block_sparse_cg.h"
 #include "corotational_fem.h"
+#include "parallel_for.h"
 #include "signed_svd.h"
 #include "tet_untangling.h"
 #include "two_level_preconditioner.h"
@@ -42,6 +43,29 @@ Box makeBox(int cx, int cy, int cz, double h) {
   b.nz = cz + 1;
   kuhnBoxMesh(Eigen::Vector3d::Zero(), h * Eigen::Vector3d(cx, cy, cz), {cx, cy, cz}, b.nodes, b.tets);
   return b;
+}
+
+/// A block of cx by cy by cz unit cubes, its bottom fixed (bone 0) and a stamp (bone 1) pressed depth
+/// into its top over the node columns from <= i <= to.
+struct StampedBlock {
+  Box b;
+  std::vector<int> fixed;
+  Points stamped;
+};
+StampedBlock stampedBlock(int cx, int cy, int cz, int from, int to, double depth) {
+  StampedBlock s{makeBox(cx, cy, cz, 1.0), {}, {}};
+  const Box& b = s.b;
+  s.fixed.assign(std::size_t(b.nodes.rows()), -1);
+  s.stamped = b.nodes;
+  for (int j = 0; j < b.ny; ++j)
+    for (int i = 0; i < b.nx; ++i) {
+      s.fixed[std::size_t(b.id(i, j, 0))] = 0;
+      if (i >= from && i <= to) {
+        s.fixed[std::size_t(b.id(i, j, b.nz - 1))] = 1;
+        s.stamped(b.id(i, j, b.nz - 1), 2) -= depth;
+      }
+    }
+  return s;
 }
 
 Points transform(const Points& P, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
@@ -356,17 +380,10 @@ TEST(FixedCorotatedFem, NearlyIncompressibleSqueezedBlockKeepsVolume) {
 // and the minimum does not depend on the solver (CHOLMOD's Newton matrix omits the term's low-rank
 // part, so its iterates differ; the two-level CG includes it).
 TEST(FixedCorotatedFem, RegionVolumeTermsKeepEachRegionsVolume) {
-  const Box b = makeBox(8, 4, 4, 1.0);
-  std::vector<int> fixed(b.nodes.rows(), -1);
-  Points stamped = b.nodes;
-  for (int j = 0; j < b.ny; ++j)
-    for (int i = 0; i < b.nx; ++i) {
-      fixed[b.id(i, j, 0)] = 0;
-      if (i >= 2 && i <= 5) {
-        fixed[b.id(i, j, b.nz - 1)] = 1;
-        stamped(b.id(i, j, b.nz - 1), 2) -= 0.6;
-      }
-    }
+  const StampedBlock block = stampedBlock(8, 4, 4, 2, 5, 0.6);
+  const Box& b = block.b;
+  const std::vector<int>& fixed = block.fixed;
+  const Points& stamped = block.stamped;
   std::vector<int> half(std::size_t(b.tets.rows()));
   std::vector<double> restVolume(2, 0.0);
   for (Eigen::Index t = 0; t < b.tets.rows(); ++t) {
@@ -393,6 +410,7 @@ TEST(FixedCorotatedFem, RegionVolumeTermsKeepEachRegionsVolume) {
   const std::vector<double> without = halfRatios(plain);
   opt.volumeRegions = half;
   opt.regionVolumeStiffness = 10.0;
+  opt.regionVolumeTolerance = 1.0;  // the penalty alone here; the multiplier updates are tested below
   Points held[2] = {stamped, stamped};
   for (int k = 0; k < 2; ++k) {
     opt.preconditioner = k == 0 ? CorotationalOptions::TwoLevel : CorotationalOptions::Cholmod;
@@ -412,6 +430,33 @@ TEST(FixedCorotatedFem, RegionVolumeTermsKeepEachRegionsVolume) {
   EXPECT_LT(without[0], 0.99);
   EXPECT_LT((held[0] - held[1]).cwiseAbs().maxCoeff(), 1e-4);
   EXPECT_GT((held[0] - plain).cwiseAbs().maxCoeff(), 1e-2);
+  // The penalty leaves each half short by about its pressure / stiffness; the multiplier updates
+  // (augmented Lagrangian) take each half to its rest volume within the tolerance.
+  const std::vector<double> penaltyOnly = halfRatios(held[0]);
+  EXPECT_GT(std::max(std::abs(penaltyOnly[0] - 1), std::abs(penaltyOnly[1] - 1)), 1e-3);
+  opt.preconditioner = CorotationalOptions::TwoLevel;
+  opt.regionVolumeTolerance = 1e-5;
+  for (double stiffness : {10.0, 30.0}) {
+    opt.regionVolumeStiffness = stiffness;
+    Points exact = stamped;
+    CorotationalReport rep;
+    repose::relaxCorotational(b.nodes, b.tets, fixed, exact, opt, &rep);
+    const std::vector<double> ratio = halfRatios(exact);
+    std::printf("stiffness %.0f: after %d multiplier updates the halves keep %.7f %.7f of their volume\n", stiffness,
+                rep.regionVolumeUpdates, ratio[0], ratio[1]);
+    EXPECT_GE(rep.regionVolumeUpdates, 1);
+    EXPECT_LE(rep.regionVolumeUpdates, opt.maxRegionVolumeUpdates);
+    EXPECT_EQ(rep.invertedAfter, 0);
+    for (int r = 0; r < 2; ++r) EXPECT_NEAR(ratio[std::size_t(r)], 1.0, 1e-5) << "stiffness " << stiffness << " half " << r;
+    for (Eigen::Index v = 0; v < exact.rows(); ++v)
+      if (fixed[std::size_t(v)] >= 0) EXPECT_EQ(exact.row(v), stamped.row(v));
+  }
+  opt.maxRegionVolumeUpdates = -1;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, plain, opt), std::invalid_argument);
+  opt.maxRegionVolumeUpdates = 4;
+  opt.regionVolumeTolerance = -1e-5;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, plain, opt), std::invalid_argument);
+  opt.regionVolumeTolerance = 1e-5;
   // Bad regions: one entry per tet, each below the tet count.
   Points x = stamped;
   opt.volumeRegions.back() = int(b.tets.rows());
@@ -419,6 +464,83 @@ TEST(FixedCorotatedFem, RegionVolumeTermsKeepEachRegionsVolume) {
   opt.volumeRegions.pop_back();
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt), std::invalid_argument);
   EXPECT_EQ(x, stamped);
+}
+
+// The energy and region volumes are summed in a fixed order, so the result does not depend on how the
+// threads split the work (with vtkSMPTools' pools the chunks finish in a different order every run):
+// the same pose twice gives the same nodes to the last bit.
+TEST(FixedCorotatedFem, SameResultHoweverTheThreadsSplitTheWork) {
+  const StampedBlock block = stampedBlock(16, 6, 6, 4, 11, 1.2);
+  const Box& b = block.b;
+  const std::vector<int>& fixed = block.fixed;
+  const Points& stamped = block.stamped;
+  std::vector<int> half(std::size_t(b.tets.rows()));
+  for (Eigen::Index t = 0; t < b.tets.rows(); ++t) half[std::size_t(t)] = b.nodes(b.tets(t, 0), 0) < 8.0 ? 0 : 1;
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::TwoLevel);
+  opt.coarseAggregateSize = 40;
+  opt.volumeRegions = half;
+  // Chunks of growing, uneven sizes, run last to first: another order of the partial sums.
+  auto reversed = [](std::size_t n, std::size_t grain, const repose::RangeBody& body) {
+    std::vector<std::pair<std::size_t, std::size_t>> chunks;
+    for (std::size_t b0 = 0, k = 1; b0 < n; b0 += k * std::max<std::size_t>(grain, 1) + 1, ++k)
+      chunks.emplace_back(b0, std::min(n, b0 + k * std::max<std::size_t>(grain, 1) + 1));
+    for (auto c = chunks.rbegin(); c != chunks.rend(); ++c) body(c->first, c->second);
+  };
+  Points x[2] = {stamped, stamped};
+  CorotationalReport rep[2];
+  repose::relaxCorotational(b.nodes, b.tets, fixed, x[0], opt, &rep[0]);
+  repose::setParallelRunner(reversed);
+  repose::relaxCorotational(b.nodes, b.tets, fixed, x[1], opt, &rep[1]);
+  repose::setParallelRunner(repose::ParallelRunner());
+  EXPECT_GT(b.tets.rows(), 4 * 512);  // several blocks of the fixed-order sums
+  EXPECT_GT(rep[0].newtonIterations, 2);
+  EXPECT_EQ(rep[0].newtonIterations, rep[1].newtonIterations);
+  EXPECT_EQ(rep[0].energyAfter, rep[1].energyAfter);
+  EXPECT_TRUE(x[0] == x[1]) << "largest difference " << (x[0] - x[1]).cwiseAbs().maxCoeff();
+  EXPECT_GT((x[0] - stamped).cwiseAbs().maxCoeff(), 0.1);
+}
+
+// An animation's next frame started from the last frame's correction (relaxed - skinned): the same
+// minimum in fewer Newton steps. A correction that would fold more tets than the input is not taken.
+TEST(FixedCorotatedFem, StartCorrectionFromTheLastPoseReachesTheSameMinimumSooner) {
+  const StampedBlock block = stampedBlock(8, 4, 4, 2, 5, 0.6);
+  const Box& b = block.b;
+  const std::vector<int>& fixed = block.fixed;
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::TwoLevel);
+  opt.coarseAggregateSize = 20;
+  const Points frame1 = block.stamped, frame2 = stampedBlock(8, 4, 4, 2, 5, 0.7).stamped;
+  Points relaxed1 = frame1;
+  repose::relaxCorotational(b.nodes, b.tets, fixed, relaxed1, opt);
+  Points cold = frame2, warm = frame2;
+  CorotationalReport coldReport, warmReport;
+  repose::relaxCorotational(b.nodes, b.tets, fixed, cold, opt, &coldReport);
+  opt.startCorrection = relaxed1 - frame1;
+  repose::relaxCorotational(b.nodes, b.tets, fixed, warm, opt, &warmReport);
+  std::printf("stamped 0.7 deep: %d Newton steps from the skinned pose, %d from the last frame's correction\n",
+              coldReport.newtonIterations, warmReport.newtonIterations);
+  EXPECT_FALSE(coldReport.correctedStart);
+  EXPECT_TRUE(warmReport.correctedStart);
+  EXPECT_LT(warmReport.newtonIterations, coldReport.newtonIterations);
+  EXPECT_LT((warm - cold).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_NEAR(warmReport.energyAfter, coldReport.energyAfter, 1e-9 * coldReport.energyAfter);
+  for (Eigen::Index v = 0; v < warm.rows(); ++v)
+    if (fixed[std::size_t(v)] >= 0) EXPECT_EQ(warm.row(v), frame2.row(v));
+  // A correction that folds the block (free nodes pushed through the stamp) is not taken.
+  opt.startCorrection = Points::Zero(b.nodes.rows(), 3);
+  for (int j = 1; j < b.ny - 1; ++j) opt.startCorrection(b.id(3, j, b.nz - 2), 2) = 3.0;
+  Points folded = frame2;
+  CorotationalReport foldedReport;
+  repose::relaxCorotational(b.nodes, b.tets, fixed, folded, opt, &foldedReport);
+  EXPECT_FALSE(foldedReport.correctedStart);
+  EXPECT_TRUE(folded == cold);
+  // One row per node, finite.
+  opt.startCorrection = Points::Zero(b.nodes.rows() - 1, 3);
+  Points x = frame2;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt), std::invalid_argument);
+  opt.startCorrection = Points::Zero(b.nodes.rows(), 3);
+  opt.startCorrection(0, 0) = std::nan("");
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, x, opt), std::invalid_argument);
+  EXPECT_EQ(x, frame2);
 }
 
 TEST(FixedCorotatedFem, InvertedTetsAreUntangledAndTheCountNeverGrows) {

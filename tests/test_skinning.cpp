@@ -383,3 +383,11 @@ TEST(BodySegments, LargestSummedWeightWins) {
   bad << 0, 1, 2, 6;
   EXPECT_THROW(repose::bodySegments(w, bad), std::invalid_argument);
 }
+
+// Segments split by tissue label: one region per (segment, label) pair, numbered as they occur.
+TEST(BodySegments, TissueSegmentsSplitEachSegmentByLabel) {
+  const std::vector<int> segments{2, 2, 5, 2, 5, -1, 2};
+  const std::vector<int> labels{7, 3, 7, 7, 7, 3, 3};
+  EXPECT_EQ(repose::tissueSegments(segments, labels), (std::vector<int>{0, 1, 2, 0, 2, -1, 1}));
+  EXPECT_THROW(repose::tissueSegments(segments, {7, 3}), std::invalid_argument);
+}

@@ -1,7 +1,9 @@
 #include "body_segments.h"
 
+#include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "parallel_for.h"
 
@@ -37,6 +39,17 @@ std::vector<int> bodySegments(const SparseWeights& weights, const Tets& tets) {
     }
   });
   return segment;
+}
+
+std::vector<int> tissueSegments(const std::vector<int>& segments, const std::vector<int>& labels) {
+  if (segments.size() != labels.size())
+    throw std::invalid_argument("tissueSegments: " + std::to_string(segments.size()) + " segments but " +
+                                std::to_string(labels.size()) + " labels");
+  std::map<std::pair<int, int>, int> id;
+  std::vector<int> region(segments.size(), -1);
+  for (std::size_t t = 0; t < segments.size(); ++t)
+    if (segments[t] >= 0) region[t] = id.emplace(std::make_pair(segments[t], labels[t]), int(id.size())).first->second;
+  return region;
 }
 
 }  // namespace repose

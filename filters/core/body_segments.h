@@ -12,4 +12,10 @@ namespace repose {
 /// Throws std::invalid_argument if a tet names a node the weights do not cover.
 std::vector<int> bodySegments(const SparseWeights& weights, const Tets& tets);
 
+/// Each segment split by tissue: one region per (segment, label) pair that occurs, numbered 0, 1, ...
+/// in order of first occurrence; negative segments stay -1 (no region). Every organ then keeps its
+/// own volume within its segment rather than the segment's tissues trading volume among themselves.
+/// Throws std::invalid_argument if the two lists differ in length.
+std::vector<int> tissueSegments(const std::vector<int>& segments, const std::vector<int>& labels);
+
 }  // namespace repose

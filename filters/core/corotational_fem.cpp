@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -114,8 +113,10 @@ class SpdSolver {
       // its rounding stays relative to the correction, not to the node coordinates.
       toBlocks(A);
       blocks_.lowRank = lowRank_;
-      Eigen::VectorXd r0 = b - A * x;
-      if (lowRank_ && !lowRank_->empty()) {
+      // (Newton starts each solve from x = 0: then the residual is b, without a product with A.)
+      const bool fromZero = (x.array() == 0.0).all();
+      Eigen::VectorXd r0 = fromZero ? Eigen::VectorXd(b) : Eigen::VectorXd(b - A * x);
+      if (lowRank_ && !lowRank_->empty() && !fromZero) {
         Eigen::VectorXd lx = Eigen::VectorXd::Zero(x.size());
         lowRank_->multiplyAdd(x, lx);
         r0 -= lx;
@@ -273,7 +274,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   for (int r : options.volumeRegions) nRegions = std::max(nRegions, r + 1);
   std::vector<int> region(nRegions > 0 ? nT : 0, -1);
   std::vector<double> regionRest(std::size_t(nRegions), 0.0), regionVolume(std::size_t(nRegions), 0.0),
-      regionPressure(std::size_t(nRegions), 0.0);
+      regionPressure(std::size_t(nRegions), 0.0), regionMultiplier(std::size_t(nRegions), 0.0);
   LowRankTerm3 regionCoupling;
   if (nRegions > 0) {
     for (std::size_t t = 0; t < nT; ++t) {
@@ -310,41 +311,52 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   std::vector<char> barrier(nT, 0);  // per tet: the log barrier (1) or the penalty (0) below det F = eps
   // Energy and inverted-tet count of a pose; always refreshes the per-tet state (a rejected trial's
   // state is overwritten by the next trial, an accepted one's is the state of the new iterate).
+  // The sums are taken per fixed block of tets and then in block order, so that they do not depend
+  // on how the threads split the work: a solve gives the same result every run (the line search's
+  // accept / reject decisions, and through them the continuation's path, hang on the last digits).
+  const std::size_t sumBlock = 512, nSumBlocks = (nT + sumBlock - 1) / sumBlock;
+  std::vector<double> blockSums(nSumBlocks * std::size_t(1 + nRegions));
+  std::vector<int> blockCounts(nSumBlocks);
   auto evaluate = [&](const Points& x, int& inverted) {
-    std::mutex lock;
+    parallelFor(nSumBlocks, [&](std::size_t bb, std::size_t be) {
+      for (std::size_t k = bb; k < be; ++k) {
+        double* sums = blockSums.data() + k * std::size_t(1 + nRegions);
+        std::fill(sums, sums + 1 + nRegions, 0.0);
+        int localCount = 0;
+        for (std::size_t t = k * sumBlock; t < std::min(nT, (k + 1) * sumBlock); ++t) {
+          const auto T = tets.row(Eigen::Index(t));
+          const RestTet& rt = restTets[t];
+          Mat3 Ds;
+          const Vec3 x0 = node(x, T[0]);
+          for (int c = 0; c < 3; ++c) Ds.col(c) = node(x, T[c + 1]) - x0;
+          const Mat3 F = Ds * rt.DmInv;
+          Mat3 U, V;
+          Vec3 sigma;
+          signedSvd(F, U, sigma, V);  // det U = det V = +1: an inverted tet has sigma(2) < 0
+          const double J = sigma.prod();
+          if (J <= 0.0) ++localCount;
+          double p, stiffness;
+          sums[0] += rt.volume * (mu * (sigma - Vec3::Ones()).squaredNorm() + volumeTerm(J, barrier[t] != 0, p, stiffness));
+          state[t] = TetState{U, V, sigma};
+          if (nRegions > 0 && region[t] >= 0) sums[1 + region[t]] += rt.volume * J;
+        }
+        blockCounts[k] = localCount;
+      }
+    }, 1);
     double energy = 0;
     int count = 0;
     std::fill(regionVolume.begin(), regionVolume.end(), 0.0);
-    parallelFor(nT, [&](std::size_t b, std::size_t e) {
-      double localEnergy = 0;
-      int localCount = 0;
-      std::vector<double> localRegion(std::size_t(nRegions), 0.0);
-      for (std::size_t t = b; t < e; ++t) {
-        const auto T = tets.row(Eigen::Index(t));
-        const RestTet& rt = restTets[t];
-        Mat3 Ds;
-        const Vec3 x0 = node(x, T[0]);
-        for (int k = 0; k < 3; ++k) Ds.col(k) = node(x, T[k + 1]) - x0;
-        const Mat3 F = Ds * rt.DmInv;
-        Mat3 U, V;
-        Vec3 sigma;
-        signedSvd(F, U, sigma, V);  // det U = det V = +1: an inverted tet has sigma(2) < 0
-        const double J = sigma.prod();
-        if (J <= 0.0) ++localCount;
-        double p, stiffness;
-        localEnergy += rt.volume * (mu * (sigma - Vec3::Ones()).squaredNorm() + volumeTerm(J, barrier[t] != 0, p, stiffness));
-        state[t] = TetState{U, V, sigma};
-        if (nRegions > 0 && region[t] >= 0) localRegion[std::size_t(region[t])] += rt.volume * J;
-      }
-      std::lock_guard<std::mutex> guard(lock);
-      energy += localEnergy;
-      count += localCount;
-      for (int r = 0; r < nRegions; ++r) regionVolume[std::size_t(r)] += localRegion[std::size_t(r)];
-    }, 512);
+    for (std::size_t k = 0; k < nSumBlocks; ++k) {
+      const double* sums = blockSums.data() + k * std::size_t(1 + nRegions);
+      energy += sums[0];
+      count += blockCounts[k];
+      for (int r = 0; r < nRegions; ++r) regionVolume[std::size_t(r)] += sums[1 + r];
+    }
     for (int r = 0; r < nRegions; ++r) {
       const double excess = regionVolume[std::size_t(r)] - regionRest[std::size_t(r)];
-      regionPressure[std::size_t(r)] = regionCoupling.weight[std::size_t(r)] * excess;
-      energy += 0.5 * regionPressure[std::size_t(r)] * excess;
+      const double penalty = regionCoupling.weight[std::size_t(r)] * excess;
+      regionPressure[std::size_t(r)] = regionMultiplier[std::size_t(r)] + penalty;
+      energy += (regionMultiplier[std::size_t(r)] + 0.5 * penalty) * excess;
     }
     inverted = count;
     return energy;
@@ -564,6 +576,24 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     }
     newton(std::max(1, options.maxNewtonIterations / 2));
   }
+  // Region volumes to regionVolumeTolerance (see CorotationalOptions::regionVolumeTolerance): the
+  // multiplier takes the pressure the penalty holds, so the next minimum needs less excess for it.
+  auto keepRegionVolumes = [&]() {
+    if (!(options.regionVolumeStiffness > 0.0)) return;  // no penalty: no pressure to fold in
+    for (int update = 0; update < options.maxRegionVolumeUpdates; ++update) {
+      double worst = 0;
+      for (int r = 0; r < nRegions; ++r)
+        if (regionRest[std::size_t(r)] > 0)
+          worst = std::max(worst, std::abs(regionVolume[std::size_t(r)] / regionRest[std::size_t(r)] - 1.0));
+      if (worst <= options.regionVolumeTolerance) return;
+      regionMultiplier = regionPressure;
+      ++rep.regionVolumeUpdates;
+      energy = evaluate(posed, inverted);
+      firstNorm = -1.0;
+      newton(std::max(1, options.maxNewtonIterations / 2));
+    }
+  };
+  keepRegionVolumes();
   // Fold-free continuation (see CorotationalOptions::continuation).
   auto invertedWithFreeNode = [&](const Points& x) { return countInverted(x, tets, &hasFree); };
   const int directInverted = invertedWithFreeNode(posed);
@@ -574,6 +604,8 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     const Points direct = posed;
     const bool directConverged = rep.converged;
     const std::vector<char> directBarrier = barrier;
+    const std::vector<double> directMultiplier = regionMultiplier;
+    std::fill(regionMultiplier.begin(), regionMultiplier.end(), 0.0);  // the rest shape has no pressure
     const BonePath path(rest, direct, fixedBone, options.boneParents);
     std::vector<int> pathNodes;  // the Dirichlet nodes of the tets
     {
@@ -639,11 +671,13 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     }
     // Newton never inverts a tet, so a completed path ends fold-free.
     const bool completed = s >= 1.0;
+    if (completed) keepRegionVolumes();
     if (completed && (options.continuation == CorotationalOptions::Always || invertedWithFreeNode(posed) < directInverted)) {
       rep.continuationUsed = true;
     } else {
       posed = direct;
       barrier = directBarrier;
+      regionMultiplier = directMultiplier;
       energy = evaluate(posed, inverted);
       rep.converged = directConverged;
     }
@@ -706,6 +740,12 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
                                   std::to_string(nT));
   if (!(options.regionVolumeStiffness >= 0.0) || !std::isfinite(options.regionVolumeStiffness))
     throw std::invalid_argument("relaxCorotational: regionVolumeStiffness must be >= 0");
+  if (options.startCorrection.size() > 0 &&
+      (options.startCorrection.rows() != nV || !options.startCorrection.allFinite()))
+    throw std::invalid_argument("relaxCorotational: startCorrection must be empty or " + std::to_string(nV) +
+                                " finite rows");
+  if (!(options.regionVolumeTolerance >= 0.0) || options.maxRegionVolumeUpdates < 0)
+    throw std::invalid_argument("relaxCorotational: regionVolumeTolerance and maxRegionVolumeUpdates must be >= 0");
   for (Eigen::Index t = 0; t < nT; ++t)
     for (int a = 0; a < 4; ++a)
       if (tets(t, a) < 0 || tets(t, a) >= nV)
@@ -729,6 +769,15 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   CorotationalReport& rep = report ? *report : local;
   rep = CorotationalReport{};
   rep.invertedBefore = countInverted(posed, tets);
+  if (options.startCorrection.size() > 0) {
+    Points start = posed;
+    for (Eigen::Index v = 0; v < nV; ++v)
+      if (fixedBone[std::size_t(v)] < 0) start.row(v) += options.startCorrection.row(v);
+    if (countInverted(start, tets) <= rep.invertedBefore) {
+      posed = start;
+      rep.correctedStart = true;
+    }
+  }
 
   // Unknowns: free nodes that belong to at least one tet (a node in no tet has no stiffness).
   std::vector<int> dof(std::size_t(nV), -1);

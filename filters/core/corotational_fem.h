@@ -79,8 +79,16 @@ struct CorotationalOptions {
   /// pressure per region (a piecewise-constant pressure field, as in mixed elements) has no such
   /// lock. Its Hessian couples a region's whole surface: kept as a low-rank term beside the sparse
   /// blocks in CG (BlockJacobi and TwoLevel only; the other solvers omit it from the Newton matrix).
+  /// The penalty alone leaves each region short by about its pressure / stiffness (on the tiny
+  /// phantom's walk, bodies 0.12-0.35 % short at stiffness 3): after Newton has converged, each
+  /// region's pressure is folded into a fixed multiplier term Lambda_r (V_r - V_r0) (augmented
+  /// Lagrangian) and Newton resumes, until every region is within regionVolumeTolerance of its rest
+  /// volume or after maxRegionVolumeUpdates such updates. Raising the stiffness instead works too,
+  /// but slows CG (stiffness 300: twice the CG iterations) where an update costs a few Newton steps.
   std::vector<int> volumeRegions;
-  double regionVolumeStiffness = 3.0;
+  double regionVolumeStiffness = 30.0;
+  double regionVolumeTolerance = 1e-5;
+  int maxRegionVolumeUpdates = 4;
   /// Tets still inverted after the solve get their free nodes moved out of the fold (see
   /// tet_untangling.h); FixedCorotated then resumes Newton from there.
   bool untangle = true;
@@ -105,6 +113,13 @@ struct CorotationalOptions {
   /// The continuation's bone paths follow the skeleton when given: per bone id (the fixedBone
   /// values), its parent's id or -1. Empty: each bone's path on its own (see bone_path.h).
   std::vector<int> boneParents;
+  /// Optional (#V by 3, or empty): a correction added to posed's free nodes to make the start, e.g.
+  /// the last animation frame's relaxed minus skinned positions. Consecutive frames differ little,
+  /// so Newton then starts next to the minimum (tiny phantom, walk frame 432: 12 Newton steps
+  /// instead of 35 and a continuation). Taken only if that start has no more inverted tets than
+  /// posed. The result may be another local minimum than from posed alone (the tissue's history):
+  /// frames stay coherent rather than each finding its own minimum.
+  Points startCorrection;
 };
 
 struct CorotationalReport {
@@ -124,9 +139,11 @@ struct CorotationalReport {
   double untangleSeconds = 0.0;          ///< ... and its time
   int invertedRigid = 0;                 ///< inverted tets after relaxing whose nodes are all fixed
   std::vector<double> regionVolumeRatio; ///< FixedCorotated with volumeRegions: V_r / V_r0 after relaxing
+  int regionVolumeUpdates = 0;           ///< ... and the multiplier updates made (see regionVolumeTolerance)
   int continuationSteps = 0;             ///< FixedCorotated: steps of the fold-free continuation (0: not run)
   bool continuationUsed = false;         ///< ... whose result replaced the direct solve's
   double continuationSeconds = 0.0;      ///< ... and its time (included in seconds)
+  bool correctedStart = false;           ///< options.startCorrection was taken
 };
 
 /// Relaxes posed to the static equilibrium of corotational linear elasticity.
