@@ -769,15 +769,6 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   CorotationalReport& rep = report ? *report : local;
   rep = CorotationalReport{};
   rep.invertedBefore = countInverted(posed, tets);
-  if (options.startCorrection.size() > 0) {
-    Points start = posed;
-    for (Eigen::Index v = 0; v < nV; ++v)
-      if (fixedBone[std::size_t(v)] < 0) start.row(v) += options.startCorrection.row(v);
-    if (countInverted(start, tets) <= rep.invertedBefore) {
-      posed = start;
-      rep.correctedStart = true;
-    }
-  }
 
   // Unknowns: free nodes that belong to at least one tet (a node in no tet has no stiffness).
   std::vector<int> dof(std::size_t(nV), -1);
@@ -791,6 +782,14 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
       freeNodes.push_back(int(i));
     }
   const std::size_t nFree = freeNodes.size();
+  if (options.startCorrection.size() > 0) {  // on the unknowns only: fixed nodes and nodes in no tet stay
+    Points start = posed;
+    for (int v : freeNodes) start.row(v) += options.startCorrection.row(v);
+    if (countInverted(start, tets) <= rep.invertedBefore) {
+      posed = start;
+      rep.correctedStart = true;
+    }
+  }
 
   // Rest data per tet (shape-function gradients and volume); rest tets must be positive.
   std::vector<RestTet> restTets(static_cast<std::size_t>(nT));
