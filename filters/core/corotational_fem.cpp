@@ -61,6 +61,27 @@ int countInverted(const Points& P, const Tets& tets, const std::vector<char>* on
   return count.load();
 }
 
+/// Whether a line-search trial can be accepted at all, from the signs of the tet volumes alone (no
+/// per-tet SVD): no more inverted tets than `inverted`, and no tet under the log barrier at det F <= 0,
+/// where its energy is infinite. (The count alone lets a barrier tet flip while penalty tets unfold.)
+bool trialAdmissible(const Points& P, const Tets& tets, const std::vector<char>& barrier, int inverted) {
+  std::atomic<int> count{0};
+  std::atomic<bool> barrierCrossed{false};
+  parallelFor(std::size_t(tets.rows()), [&](std::size_t b, std::size_t e) {
+    int local = 0;
+    bool crossed = false;
+    for (std::size_t t = b; t < e; ++t) {
+      const auto T = tets.row(Eigen::Index(t));
+      if (tetVolume(node(P, T[0]), node(P, T[1]), node(P, T[2]), node(P, T[3])) > 0.0) continue;
+      ++local;
+      crossed = crossed || barrier[t];
+    }
+    count += local;
+    if (crossed) barrierCrossed = true;
+  });
+  return !barrierCrossed.load() && count.load() <= inverted;
+}
+
 /// The report's inverted counts after relaxing: all of them, and those no free node can repair.
 void countInvertedAfter(const Points& P, const Tets& tets, const std::vector<int>& fixedBone, CorotationalReport& rep) {
   rep.invertedAfter = rep.invertedRigid = 0;
@@ -495,8 +516,14 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     if (options.inversionBarrier && volumeTerm.kappa > 0) {  // the barrier guards the tets positive now
       // (Not on tets of Dirichlet nodes only: their energy is a constant of the solve, and a bone
       // move of the continuation may turn them.)
-      for (std::size_t t = 0; t < nT; ++t) barrier[t] = hasFree[t] && state[t].sigma.prod() > 0.0;
-      energy = evaluate(posed, inverted);
+      // (The energy is re-evaluated only when a flag changed: callers pass the energy of posed.)
+      bool changed = false;
+      for (std::size_t t = 0; t < nT; ++t) {
+        const char b = hasFree[t] && state[t].sigma.prod() > 0.0;
+        changed = changed || b != barrier[t];
+        barrier[t] = b;
+      }
+      if (changed) energy = evaluate(posed, inverted);
     }
     for (int it = 0; it < maxIterations; ++it) {
       const auto assemblyStart = std::chrono::steady_clock::now();
@@ -528,9 +555,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       for (int halving = 0; halving < 40 && alpha * maxMove > 1e-3 * stepLimit; ++halving, alpha *= 0.5) {
         for (std::size_t i = 0; i < nFree; ++i)
           trial.row(freeNodes[i]) = posed.row(freeNodes[i]) + alpha * step.segment<3>(Eigen::Index(3 * i)).transpose();
-        // A step that inverts more tets is refused on the signs of the tet volumes alone, without
-        // the per-tet SVDs of the energy (most of the line search's cut-backs are such steps).
-        if (countInverted(trial, tets) > inverted) continue;
+        // A step that inverts more tets, or turns a barrier tet, is refused on the signs of the tet
+        // volumes alone, without the per-tet SVDs of the energy (most of the line search's cut-backs
+        // are such steps: far from the minimum, Newton's full step overshoots a thin tet).
+        if (!trialAdmissible(trial, tets, barrier, inverted)) continue;
         int trialInverted = 0;
         const double trialEnergy = evaluate(trial, trialInverted);
         if (trialInverted <= inverted && trialEnergy <= energy + 1e-4 * alpha * std::min(slope, 0.0)) {
@@ -580,12 +608,16 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   // multiplier takes the pressure the penalty holds, so the next minimum needs less excess for it.
   auto keepRegionVolumes = [&]() {
     if (!(options.regionVolumeStiffness > 0.0)) return;  // no penalty: no pressure to fold in
+    double lastWorst = std::numeric_limits<double>::infinity();
     for (int update = 0; update < options.maxRegionVolumeUpdates; ++update) {
       double worst = 0;
       for (int r = 0; r < nRegions; ++r)
         if (regionRest[std::size_t(r)] > 0)
           worst = std::max(worst, std::abs(regionVolume[std::size_t(r)] / regionRest[std::size_t(r)] - 1.0));
-      if (worst <= options.regionVolumeTolerance) return;
+      // An update that did not halve the error is the last: the inner Newton stops at an energy
+      // change of energyTolerance, and below that the multipliers only follow its rounding.
+      if (worst <= options.regionVolumeTolerance || worst > 0.5 * lastWorst) return;
+      lastWorst = worst;
       regionMultiplier = regionPressure;
       ++rep.regionVolumeUpdates;
       energy = evaluate(posed, inverted);
