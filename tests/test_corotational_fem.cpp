@@ -1030,7 +1030,74 @@ repose::BlockSparseMatrix3f clampedBoxStiffness(const Box& b, double lambda, dou
   return A;
 }
 
+// The blocks of a symmetric matrix on and above the diagonal, as an upper-stored matrix.
+repose::BlockSparseMatrix3f upperPart(const repose::BlockSparseMatrix3f& full) {
+  repose::BlockSparseMatrix3f U;
+  U.upper = true;
+  U.rowStart.push_back(0);
+  for (int i = 0; i < full.rows(); ++i) {
+    for (int k = full.rowStart[std::size_t(i)]; k < full.rowStart[std::size_t(i) + 1]; ++k) {
+      if (full.column[std::size_t(k)] < i) continue;
+      U.column.push_back(full.column[std::size_t(k)]);
+      U.values.insert(U.values.end(), full.values.begin() + 9 * k, full.values.begin() + 9 * (k + 1));
+    }
+    U.rowStart.push_back(int(U.column.size()));
+  }
+  return U;
+}
+
 }  // namespace
+
+// Upper storage (the FEM's Newton matrices): the same operator from about half the blocks, also
+// with couplings that reach across the threads' row ranges (j = i + n/2) and rows with no block.
+TEST(BlockSparseCg, UpperStorageIsTheSameOperator) {
+  const int n = 400;
+  std::mt19937 rng(17);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (int i = 0; i < n; ++i)
+    for (int j : {i + 1, i + 7, i + n / 2})
+      if (j < n) {
+        Eigen::Matrix3d B;
+        for (int k = 0; k < 9; ++k) B(k / 3, k % 3) = 0.3 * g(rng);
+        dense.block<3, 3>(3 * i, 3 * j) = B;
+        dense.block<3, 3>(3 * j, 3 * i) = B.transpose();
+      }
+  for (int i = 0; i < 3 * n; ++i) dense(i, i) = 5.0 + std::abs(g(rng));
+  repose::BlockSparseMatrix3f A;
+  A.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j)
+      if (dense.block<3, 3>(3 * i, 3 * j).cwiseAbs().maxCoeff() > 0) {
+        A.column.push_back(j);
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) A.values.push_back(float(dense(3 * i + r, 3 * j + c)));
+      }
+    A.rowStart.push_back(int(A.column.size()));
+  }
+  const repose::BlockSparseMatrix3f U = upperPart(A);
+  EXPECT_TRUE(U.upper);
+  EXPECT_LT(U.column.size(), 0.6 * double(A.column.size()));
+  Eigen::VectorXd x(3 * n);
+  for (int i = 0; i < 3 * n; ++i) x(i) = g(rng);
+  Eigen::VectorXd yFull, yUpper;
+  A.multiply(x, yFull);
+  U.multiply(x, yUpper);
+  EXPECT_LT((yUpper - yFull).norm(), 1e-12 * yFull.norm());
+  const Eigen::MatrixXd asFloat = dense.cast<float>().cast<double>();
+  EXPECT_LT((yUpper - asFloat * x).norm(), 1e-12 * yFull.norm());
+  Eigen::VectorXd solution = Eigen::VectorXd::Zero(3 * n);
+  EXPECT_LE(repose::blockJacobiCg(U, x, solution, 1e-10, 1000).relativeResidual, 1e-10);
+  EXPECT_LT((solution - asFloat.ldlt().solve(x)).norm(), 1e-8 * solution.norm());
+  // Empty rows (a node whose blocks all sit in earlier rows cannot exist, but the product must not
+  // depend on it): the zero matrix of the same size gives zero.
+  repose::BlockSparseMatrix3f empty;
+  empty.upper = true;
+  empty.rowStart.assign(std::size_t(n) + 1, 0);
+  empty.multiply(x, yUpper);
+  EXPECT_EQ(yUpper.size(), 3 * n);
+  EXPECT_EQ(yUpper.cwiseAbs().maxCoeff(), 0.0);
+}
 
 TEST(TwoLevelPreconditioner, SolvesAnElasticitySystemLikeADenseSolver) {
   const Box b = makeBox(8, 4, 4, 1.0);
@@ -1061,6 +1128,37 @@ TEST(TwoLevelPreconditioner, SolvesAnElasticitySystemLikeADenseSolver) {
   // A warm start at the solution needs no iteration.
   Eigen::VectorXd warm = exact;
   EXPECT_EQ(repose::preconditionedBlockCg(A, rhs, warm, 1e-6, 1000, M).iterations, 0);
+}
+
+// An upper-stored matrix gives the same aggregates, the same coarse matrix (P^T A P from the stored
+// blocks and their transposes) and so the same preconditioner and CG.
+TEST(TwoLevelPreconditioner, UpperStorageGivesTheSamePreconditioner) {
+  const Box b = makeBox(12, 4, 4, 1.0);
+  Points positions;
+  const repose::BlockSparseMatrix3f A = clampedBoxStiffness(b, 5.0, 1.0, positions);
+  const repose::BlockSparseMatrix3f U = upperPart(A);
+  const int n = A.rows();
+  repose::TwoLevelPreconditioner full, upper;
+  full.aggregate(A, positions, 20);
+  upper.aggregate(U, positions, 20);
+  ASSERT_EQ(upper.aggregates(), full.aggregates());
+  ASSERT_EQ(upper.coarseSize(), full.coarseSize());
+  EXPECT_GT(full.aggregates(), 4);
+  full.update(A, positions);
+  upper.update(U, positions);
+  std::mt19937 rng(9);
+  std::normal_distribution<double> g;
+  Eigen::VectorXd r(3 * n), zFull, zUpper;
+  for (int i = 0; i < 3 * n; ++i) r(i) = g(rng);
+  const double rzFull = full.apply(r, zFull), rzUpper = upper.apply(r, zUpper);
+  EXPECT_LT((zUpper - zFull).norm(), 1e-9 * zFull.norm());
+  EXPECT_NEAR(rzUpper, rzFull, 1e-9 * std::abs(rzFull));
+  Eigen::VectorXd xFull = Eigen::VectorXd::Zero(3 * n), xUpper = xFull;
+  const repose::BlockCgResult cgFull = repose::preconditionedBlockCg(A, r, xFull, 1e-10, 1000, full);
+  const repose::BlockCgResult cgUpper = repose::preconditionedBlockCg(U, r, xUpper, 1e-10, 1000, upper);
+  EXPECT_LE(cgUpper.relativeResidual, 1e-10);
+  EXPECT_LE(std::abs(cgUpper.iterations - cgFull.iterations), 1);
+  EXPECT_LT((xUpper - xFull).norm(), 1e-8 * xFull.norm());
 }
 
 // The coarse space takes the smooth error that block Jacobi is slow on: far fewer iterations on a

@@ -1,6 +1,8 @@
 #include "block_sparse_cg.h"
 
 #include <Eigen/LU>
+#include <algorithm>
+#include <omp.h>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -8,6 +10,11 @@
 namespace repose {
 
 void BlockSparseMatrix3f::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  if (upper) {
+    multiplyUpper(x, y);
+    if (lowRank && !lowRank->empty()) lowRank->multiplyAdd(x, y);
+    return;
+  }
   const int n = rows();
   y.resize(3 * Eigen::Index(n));
   const double* xp = x.data();
@@ -28,6 +35,96 @@ void BlockSparseMatrix3f::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y)
     yp[3 * std::size_t(i) + 2] = s2;
   }
   if (lowRank && !lowRank->empty()) lowRank->multiplyAdd(x, y);
+}
+
+namespace {
+
+// Rows [begin, end) of an upper-stored product: y_i += A_ij x_j, and A_ij^T x_i added to y_j for
+// j < end or to spill_j beyond. Plain arrays only (no Eigen types, whose layout may differ between
+// instruction sets), so the function can be built twice: for AVX2/FMA, where most of the time goes
+// into the arithmetic rather than memory, and for any x86-64, chosen when the library is loaded.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void upperRows(int begin, int end, const int* rowStart, const int* column, const float* values, const double* x,
+               double* y, double* spill) {
+  for (int i = begin; i < end; ++i) {
+    const double xi0 = x[3 * std::size_t(i)], xi1 = x[3 * std::size_t(i) + 1], xi2 = x[3 * std::size_t(i) + 2];
+    double s0 = 0, s1 = 0, s2 = 0;
+    for (int k = rowStart[i]; k < rowStart[i + 1]; ++k) {
+      const float* v = values + 9 * std::size_t(k);
+      const int j = column[k];
+      const double* xc = x + 3 * std::size_t(j);
+      const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
+      const double a0 = v[0], a1 = v[1], a2 = v[2], a3 = v[3], a4 = v[4], a5 = v[5], a6 = v[6], a7 = v[7], a8 = v[8];
+      s0 += a0 * x0 + a1 * x1 + a2 * x2;
+      s1 += a3 * x0 + a4 * x1 + a5 * x2;
+      s2 += a6 * x0 + a7 * x1 + a8 * x2;
+      if (j == i) continue;
+      double* out = (j < end ? y : spill) + 3 * std::size_t(j);
+      out[0] += a0 * xi0 + a3 * xi1 + a6 * xi2;
+      out[1] += a1 * xi0 + a4 * xi1 + a7 * xi2;
+      out[2] += a2 * xi0 + a5 * xi1 + a8 * xi2;
+    }
+    y[3 * std::size_t(i)] += s0;
+    y[3 * std::size_t(i) + 1] += s1;
+    y[3 * std::size_t(i) + 2] += s2;
+  }
+}
+
+}  // namespace
+
+// Each thread takes a contiguous range of rows (split by stored blocks) and adds, for every block
+// A_ij, A_ij x_j to y_i and A_ij^T x_i to y_j. j >= i, so the second lands in the thread's own rows
+// or in later threads' rows; the latter go to the thread's spill buffer, which covers the rows from
+// its range's end to the largest column it reaches (mesh orderings keep that short), and are added
+// after all threads are done. Fixed ranges and order: the same sums on every run.
+void BlockSparseMatrix3f::multiplyUpper(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  const int n = rows();
+  y.resize(3 * Eigen::Index(n));
+  if (n == 0) return;
+  std::vector<int> first, reach;
+  std::vector<std::size_t> spillAt;
+  const double* xp = x.data();
+  double* yp = y.data();
+#pragma omp parallel
+  {
+#pragma omp single
+    {  // the ranges, for the team actually running
+      const int threads = omp_get_num_threads();
+      first.assign(std::size_t(threads) + 1, n);
+      reach.assign(std::size_t(threads), n);
+      spillAt.assign(std::size_t(threads) + 1, 0);
+      const long long blocks = rowStart[std::size_t(n)];
+      first[0] = 0;
+      for (int t = 1; t < threads; ++t)
+        first[std::size_t(t)] = std::max(first[std::size_t(t) - 1],
+                                         int(std::upper_bound(rowStart.begin(), rowStart.end(),
+                                                              (long long)(blocks * t / threads)) - rowStart.begin()) - 1);
+      for (int t = 0; t < threads; ++t) {
+        int far = first[std::size_t(t) + 1];
+        for (int i = first[std::size_t(t)]; i < first[std::size_t(t) + 1]; ++i)
+          if (rowStart[std::size_t(i) + 1] > rowStart[std::size_t(i)])
+            far = std::max(far, column[std::size_t(rowStart[std::size_t(i) + 1]) - 1] + 1);
+        reach[std::size_t(t)] = far;
+        spillAt[std::size_t(t) + 1] = spillAt[std::size_t(t)] + 3 * std::size_t(far - first[std::size_t(t) + 1]);
+      }
+      spill_.resize(spillAt.back());
+    }
+    const int t = omp_get_thread_num();
+    const int begin = first[std::size_t(t)], end = first[std::size_t(t) + 1];
+    double* spill = spill_.data() + spillAt[std::size_t(t)] - 3 * std::size_t(end);  // indexed by 3 j
+    std::fill(yp + 3 * std::size_t(begin), yp + 3 * std::size_t(end), 0.0);
+    std::fill(spill_.data() + spillAt[std::size_t(t)], spill_.data() + spillAt[std::size_t(t) + 1], 0.0);
+    upperRows(begin, end, rowStart.data(), column.data(), values.data(), xp, yp, spill);
+#pragma omp barrier
+    // This thread's rows take what earlier threads spilled into them, in thread order.
+    for (int u = 0; u < t; ++u) {
+      const int from = std::max(begin, first[std::size_t(u) + 1]), to = std::min(end, reach[std::size_t(u)]);
+      const double* other = spill_.data() + spillAt[std::size_t(u)] - 3 * std::size_t(first[std::size_t(u) + 1]);
+      for (std::size_t k = 3 * std::size_t(from); k < 3 * std::size_t(std::max(from, to)); ++k) yp[k] += other[k];
+    }
+  }
 }
 
 void LowRankTerm3::multiplyAdd(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {

@@ -25,11 +25,18 @@ struct BlockSparseMatrix3f {
   std::vector<int> rowStart;   ///< #rows + 1: blocks of block row i are [rowStart[i], rowStart[i + 1])
   std::vector<int> column;     ///< block column of each block, ascending within a row
   std::vector<float> values;   ///< 9 per block, row-major
+  /// Only the blocks with column >= row are stored (each row starts with its diagonal block) and
+  /// the matrix is their symmetric completion: half the memory, and half the traffic of multiply().
+  bool upper = false;
   /// Optional: added to the blocks by multiply() (not seen by the block-diagonal preconditioners).
   const LowRankTerm3* lowRank = nullptr;
   int rows() const { return rowStart.empty() ? 0 : int(rowStart.size()) - 1; }
   /// y = A x (x, y: 3 * rows()), threaded over block rows.
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+
+ private:
+  void multiplyUpper(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  mutable std::vector<double> spill_;  // multiplyUpper's per-thread sums for other threads' rows
 };
 
 struct BlockCgResult {

@@ -102,6 +102,9 @@ struct RestTet {
   double volume;
 };
 
+/// incColumn's mark for a block the Newton matrix does not store (below the diagonal of an upper one).
+constexpr std::uint16_t kNotStored = 0xFFFF;
+
 /// Shape-function gradients of a tet: row a is grad N_a.
 Eigen::Matrix<double, 4, 3> gradients(const RestTet& rt) {
   Eigen::Matrix<double, 4, 3> g;
@@ -126,6 +129,20 @@ class SpdSolver {
   /// A low-rank term added to the matrices given to solve() (BlockJacobi and TwoLevel only).
   void setLowRank(const LowRankTerm3* lowRank) { lowRank_ = lowRank; }
 
+  /// Block CG on float blocks (BlockJacobi and TwoLevel), the residual of the guess in H's own
+  /// precision (exact when x = 0, as in Newton's solves).
+  void solve(BlockSparseMatrix3f& H, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int& iterations,
+             double& residual) {
+    H.lowRank = lowRank_;
+    Eigen::VectorXd r0 = b;
+    if (!(x.array() == 0.0).all()) {
+      Eigen::VectorXd hx;
+      H.multiply(x, hx);
+      r0 -= hx;
+    }
+    solveCorrection(H, b, r0, x, tolerance, iterations, residual);
+  }
+
   void solve(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int& iterations,
              double& residual) {
     if (options_.preconditioner == CorotationalOptions::BlockJacobi ||
@@ -142,26 +159,7 @@ class SpdSolver {
         lowRank_->multiplyAdd(x, lx);
         r0 -= lx;
       }
-      const double bn = b.norm(), rn = r0.norm();
-      iterations = 0;
-      residual = bn > 0 ? rn / bn : 0.0;
-      if (rn > tolerance * bn) {
-        Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
-        BlockCgResult r;
-        if (options_.preconditioner == CorotationalOptions::TwoLevel && tolerance < options_.twoLevelBelowTolerance) {
-          prepareTwoLevel();
-          r = preconditionedBlockCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
-        } else if (lowRank_ && !lowRank_->empty()) {  // block Jacobi with the low-rank term (Woodbury)
-          if (!twoLevel_.aggregated()) twoLevel_.aggregate(blocks_, freePositions(*rest_), options_.coarseAggregateSize);
-          twoLevel_.updateFine(blocks_);
-          r = preconditionedBlockCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
-        } else {
-          r = blockJacobiCg(blocks_, r0, dx, tolerance * bn / rn, options_.maxCgIterations);
-        }
-        x += dx;
-        iterations = r.iterations;
-        residual = r.relativeResidual * rn / bn;
-      }
+      solveCorrection(blocks_, b, r0, x, tolerance, iterations, residual);
     } else if (options_.preconditioner == CorotationalOptions::Cholmod) {
       if (!analyzed_) {
         // METIS nested dissection (as for the harmonic weights); CHOLMOD's defaults without METIS.
@@ -210,6 +208,30 @@ class SpdSolver {
   }
 
  private:
+  /// x += the block CG's solution of H dx = r0 (r0 = b - A x), to tolerance relative to |b|.
+  void solveCorrection(const BlockSparseMatrix3f& H, const Eigen::VectorXd& b, const Eigen::VectorXd& r0,
+                       Eigen::VectorXd& x, double tolerance, int& iterations, double& residual) {
+    const double bn = b.norm(), rn = r0.norm();
+    iterations = 0;
+    residual = bn > 0 ? rn / bn : 0.0;
+    if (!(rn > tolerance * bn)) return;
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+    BlockCgResult r;
+    if (options_.preconditioner == CorotationalOptions::TwoLevel && tolerance < options_.twoLevelBelowTolerance) {
+      prepareTwoLevel(H);
+      r = preconditionedBlockCg(H, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
+    } else if (lowRank_ && !lowRank_->empty()) {  // block Jacobi with the low-rank term (Woodbury)
+      if (!twoLevel_.aggregated()) twoLevel_.aggregate(H, freePositions(*rest_), options_.coarseAggregateSize);
+      twoLevel_.updateFine(H);
+      r = preconditionedBlockCg(H, r0, dx, tolerance * bn / rn, options_.maxCgIterations, twoLevel_);
+    } else {
+      r = blockJacobiCg(H, r0, dx, tolerance * bn / rn, options_.maxCgIterations);
+    }
+    x += dx;
+    iterations = r.iterations;
+    residual = r.relativeResidual * rn / bn;
+  }
+
   Points freePositions(const Points& all) const {
     Points p(Eigen::Index(freeNodes_->size()), 3);
     for (std::size_t i = 0; i < freeNodes_->size(); ++i) p.row(Eigen::Index(i)) = all.row((*freeNodes_)[i]);
@@ -217,10 +239,10 @@ class SpdSolver {
   }
 
   /// Aggregates from the rest pose once (the pattern is fixed), the coarse matrix per solve.
-  void prepareTwoLevel() {
+  void prepareTwoLevel(const BlockSparseMatrix3f& H) {
     if (!rest_) throw std::logic_error("SpdSolver: setNodes() is needed for the two-level preconditioner");
-    if (!twoLevel_.aggregated()) twoLevel_.aggregate(blocks_, freePositions(*rest_), options_.coarseAggregateSize);
-    twoLevel_.update(blocks_, freePositions(*current_));
+    if (!twoLevel_.aggregated()) twoLevel_.aggregate(H, freePositions(*rest_), options_.coarseAggregateSize);
+    twoLevel_.update(H, freePositions(*current_));
   }
 
   /// A's values as float 3x3 blocks. A holds one block row per free node: scalar column 3i + c
@@ -264,6 +286,35 @@ class SpdSolver {
   const LowRankTerm3* lowRank_ = nullptr;
 };
 
+/// The Newton matrix over the free nodes, block row i for free node i. For the block CG (BlockJacobi,
+/// TwoLevel) float 3x3 blocks of the upper triangle, assembled in place: no double matrix to fill and
+/// convert, half the blocks to compute, half the traffic per CG product. For CHOLMOD, incomplete
+/// Cholesky and Eigen's CG, scalar double CSR with both triangles (symmetric, so column 3i + c holds
+/// row 3i + c: block row i's blocks in column order, 3 scalars each).
+struct NewtonMatrix {
+  bool blocked = false;
+  BlockSparseMatrix3f blocks;
+  SpMat scalar;
+
+  int rowLength(std::size_t i) const {
+    return blocked ? blocks.rowStart[i + 1] - blocks.rowStart[i]
+                   : (scalar.outerIndexPtr()[3 * i + 1] - scalar.outerIndexPtr()[3 * i]) / 3;
+  }
+  /// Block row i from rowBlocks: rowLength(i) blocks of 9 doubles (row-major), in column order.
+  void setRow(std::size_t i, const double* rowBlocks) {
+    const int len = rowLength(i);
+    if (blocked) {
+      float* dst = blocks.values.data() + 9 * std::size_t(blocks.rowStart[i]);
+      for (int k = 0; k < 9 * len; ++k) dst[k] = float(rowBlocks[k]);
+      return;
+    }
+    double* v0 = scalar.valuePtr() + scalar.outerIndexPtr()[3 * i];
+    for (int k = 0; k < len; ++k)
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) v0[3 * c * len + 3 * k + d] = rowBlocks[9 * k + 3 * c + d];
+  }
+};
+
 /// Per-tet state of the fixed-corotated energy at a pose: Irving's signed SVD F = U diag(sigma) V^T
 /// (det U = det V = +1, an inverted tet has sigma(2) < 0). Stress, cofactor and Hessian follow from it.
 struct TetState {
@@ -276,7 +327,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
                          CorotationalReport& rep, const std::vector<RestTet>& restTets,
                          const std::vector<int>& fixedBone,
                          const std::vector<int>& freeNodes, const std::vector<int>& incStart,
-                         const std::vector<int>& incTet, const std::vector<std::uint16_t>& incColumn, SpMat& A,
+                         const std::vector<int>& incTet, const std::vector<std::uint16_t>& incColumn, NewtonMatrix& A,
                          SpdSolver& solver, double lambda, double mu) {
   const VolumeTerm volumeTerm{lambda, options.inversionPenalty * lambda, options.inversionThreshold};
   const std::size_t nT = std::size_t(tets.rows()), nFree = freeNodes.size();
@@ -437,13 +488,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   auto assemble = [&](const Points* dirichletMove) {
     if (dirichletMove) dirichletForce.setZero(n);
     prepareHessians();
-    double* values = A.valuePtr();
-    const int* outerIdx = A.outerIndexPtr();
     parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+      std::vector<double> row;  // the row's blocks, summed in double
       for (std::size_t i = b; i < e; ++i) {
-        const int rowLen = (outerIdx[3 * i + 1] - outerIdx[3 * i]) / 3;
-        double* v0 = values + outerIdx[3 * i];
-        std::fill(v0, v0 + 9 * rowLen, 0.0);
+        row.assign(9 * std::size_t(A.rowLength(i)), 0.0);
         Vec3 gi = Vec3::Zero(), fi = Vec3::Zero();
         const int couplingBegin = nRegions > 0 ? regionCoupling.rowStart[i] : 0;
         const int couplingEnd = nRegions > 0 ? regionCoupling.rowStart[i + 1] : 0;
@@ -476,6 +524,8 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
             const int v = tets(t, bb);
             const bool dirichlet = fixedBone[std::size_t(v)] >= 0;
             if (dirichlet && !dirichletMove) continue;  // Dirichlet: no increment
+            const std::uint16_t slot = incColumn[4 * std::size_t(k) + std::size_t(bb)];
+            if (!dirichlet && slot == kNotStored) continue;  // below the diagonal of an upper matrix
             // Block (a, bb) in the frame of U: diag(wa) S diag(wb) plus the twist / flip pairs.
             const Vec3 wb = w.col(bb);
             Mat3 L;
@@ -493,17 +543,24 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
               fi += block * node(*dirichletMove, v);
               continue;
             }
-            const std::size_t off = incColumn[4 * std::size_t(k) + std::size_t(bb)];
-            for (int cc = 0; cc < 3; ++cc) {
-              double* vc = v0 + 3 * cc * rowLen + off;
-              for (int d = 0; d < 3; ++d) vc[d] += block(cc, d);
-            }
+            double* dst = row.data() + 9 * std::size_t(slot);
+            for (int cc = 0; cc < 3; ++cc)
+              for (int d = 0; d < 3; ++d) dst[3 * cc + d] += block(cc, d);
           }
         }
+        A.setRow(i, row.data());
         grad.segment<3>(Eigen::Index(3 * i)) = gi;
         if (dirichletMove) dirichletForce.segment<3>(Eigen::Index(3 * i)) = fi;
       }
     }, 256);
+  };
+  // A's own solve: float blocks in place, or the double matrix.
+  auto solveNewton = [&](const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance, int& iterations,
+                         double& residual) {
+    if (A.blocked)
+      solver.solve(A.blocks, b, x, tolerance, iterations, residual);
+    else
+      solver.solve(A.scalar, b, x, tolerance, iterations, residual);
   };
 
   int inverted = 0;
@@ -541,7 +598,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       step.setZero();
       int iterations = 0;
       double residual = 0.0;
-      solver.solve(A, -grad, step, eta, iterations, residual);
+      solveNewton(-grad, step, eta, iterations, residual);
       rep.solveSeconds += seconds(solveStart);
       rep.cgIterations.push_back(iterations);
       rep.relativeResidual.push_back(residual);
@@ -674,7 +731,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       predictor.setZero();
       int iterations = 0;
       double residual = 0.0;
-      solver.solve(A, -(grad + dirichletForce), predictor, 1e-2, iterations, residual);
+      solveNewton(-(grad + dirichletForce), predictor, 1e-2, iterations, residual);
       rep.solveSeconds += seconds(solveStart);
       // The largest fraction of the step (halved from 1) that leaves every tet positive.
       double alpha = 1.0;
@@ -871,7 +928,12 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
       }
   }
 
-  // Block sparsity pattern: row i holds its free neighbours (and itself), sorted.
+  // Block sparsity pattern: row i holds its free neighbours (and itself), sorted; an upper matrix
+  // (the fixed-corotated model's block CG, see NewtonMatrix) only those from i on.
+  NewtonMatrix A;
+  A.blocked = options.model == CorotationalOptions::FixedCorotated &&
+              (options.preconditioner == CorotationalOptions::BlockJacobi ||
+               options.preconditioner == CorotationalOptions::TwoLevel);
   std::vector<int> rowStart(nFree + 1, 0);
   std::vector<std::vector<int>> rowCols;
   rowCols.resize(nFree);
@@ -882,7 +944,8 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
         const int t = incTet[std::size_t(k)] / 4;
         for (int c = 0; c < 4; ++c) {
           const int v = tets(t, c);
-          if (fixedBone[std::size_t(v)] < 0) cols.push_back(dof[std::size_t(v)]);
+          if (fixedBone[std::size_t(v)] < 0 && (!A.blocked || dof[std::size_t(v)] >= int(i)))
+            cols.push_back(dof[std::size_t(v)]);
         }
       }
       std::sort(cols.begin(), cols.end());
@@ -891,42 +954,54 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   });
   for (std::size_t i = 0; i < nFree; ++i) rowStart[i + 1] = rowStart[i] + int(rowCols[i].size());
   const Eigen::Index n = Eigen::Index(3 * nFree);
-  // Symmetric, so the column-major arrays are filled row by row: column 3i+c holds row 3i+c.
-  SpMat A(n, n);
-  A.resizeNonZeros(Eigen::Index(9) * rowStart[nFree]);
-  for (std::size_t i = 0; i < nFree; ++i)
-    for (int c = 0; c < 3; ++c) A.outerIndexPtr()[3 * i + c] = 9 * rowStart[i] + 3 * c * int(rowCols[i].size());
-  A.outerIndexPtr()[n] = 9 * rowStart[nFree];
-  parallelFor(nFree, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const std::vector<int>& cols = rowCols[i];
-      for (int c = 0; c < 3; ++c) {
-        int* inner = A.innerIndexPtr() + A.outerIndexPtr()[3 * i + c];
-        for (std::size_t k = 0; k < cols.size(); ++k)
-          for (int d = 0; d < 3; ++d) inner[3 * k + std::size_t(d)] = 3 * cols[k] + d;
+  if (A.blocked) {
+    A.blocks.upper = true;
+    A.blocks.rowStart = rowStart;
+    A.blocks.column.resize(std::size_t(rowStart[nFree]));
+    A.blocks.values.assign(9 * std::size_t(rowStart[nFree]), 0.0f);
+    parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i)
+        std::copy(rowCols[i].begin(), rowCols[i].end(), A.blocks.column.begin() + rowStart[i]);
+    });
+  } else {
+    // Symmetric, so the column-major arrays are filled row by row: column 3i+c holds row 3i+c.
+    SpMat& S = A.scalar;
+    S.resize(n, n);
+    S.resizeNonZeros(Eigen::Index(9) * rowStart[nFree]);
+    for (std::size_t i = 0; i < nFree; ++i)
+      for (int c = 0; c < 3; ++c) S.outerIndexPtr()[3 * i + c] = 9 * rowStart[i] + 3 * c * int(rowCols[i].size());
+    S.outerIndexPtr()[n] = 9 * rowStart[nFree];
+    parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        const std::vector<int>& cols = rowCols[i];
+        for (int c = 0; c < 3; ++c) {
+          int* inner = S.innerIndexPtr() + S.outerIndexPtr()[3 * i + c];
+          for (std::size_t k = 0; k < cols.size(); ++k)
+            for (int d = 0; d < 3; ++d) inner[3 * k + std::size_t(d)] = 3 * cols[k] + d;
+        }
       }
-    }
-  });
-  // Where each (free node, incident tet, tet node) block goes in the node's row: its scalar column
-  // offset there, found once here instead of by a search in every assembly.
-  std::vector<std::uint16_t> incColumn(4 * incTet.size(), std::uint16_t(0xFFFF));
+    });
+  }
+  // Where each (free node, incident tet, tet node) block goes in the node's row: its index there
+  // (kNotStored: not stored), found once here instead of by a search in every assembly.
+  std::vector<std::uint16_t> incColumn(4 * incTet.size(), kNotStored);
   std::atomic<bool> rowTooLong{false};
   parallelFor(nFree, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
       const std::vector<int>& cols = rowCols[i];
-      if (3 * cols.size() >= 0xFFFF) rowTooLong = true;
+      if (cols.size() >= kNotStored) rowTooLong = true;
       for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
         const int t = incTet[std::size_t(k)] / 4;
         for (int c = 0; c < 4; ++c) {
           const int v = tets(t, c);
-          if (fixedBone[std::size_t(v)] >= 0) continue;
+          if (fixedBone[std::size_t(v)] >= 0 || (A.blocked && dof[std::size_t(v)] < int(i))) continue;
           const auto pos = std::lower_bound(cols.begin(), cols.end(), dof[std::size_t(v)]) - cols.begin();
-          incColumn[4 * std::size_t(k) + std::size_t(c)] = std::uint16_t(3 * pos);
+          incColumn[4 * std::size_t(k) + std::size_t(c)] = std::uint16_t(pos);
         }
       }
     }
   });
-  if (rowTooLong)  // a node with over 21844 neighbours: not a tet mesh a skinning could come from
+  if (rowTooLong)  // a node with over 65534 neighbours: not a tet mesh a skinning could come from
     throw std::invalid_argument("relaxCorotational: a node has too many neighbours");
   rowCols.clear();
   rowCols.shrink_to_fit();
@@ -962,8 +1037,8 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     // Row-wise assembly (no write conflicts): for free node i = local a of tet t, the blocks
     // K'_ab = R K_ab R^T with K_ab = V (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a.g_b) I), and
     // rhs_i = sum_t R sum_b K_ab x0_b  -  sum_{b fixed} K'_ab x_b.
-    double* values = A.valuePtr();
-    const int* outerIdx = A.outerIndexPtr();
+    double* values = A.scalar.valuePtr();
+    const int* outerIdx = A.scalar.outerIndexPtr();
     parallelFor(nFree, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
         const int rowLen = (outerIdx[3 * i + 1] - outerIdx[3 * i]) / 3;  // blocks in the row
@@ -990,7 +1065,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
             if (fixedBone[std::size_t(v)] >= 0) {
               r -= block * node(posed, v);
             } else {
-              const std::size_t off = incColumn[4 * std::size_t(k) + std::size_t(bb)];
+              const std::size_t off = 3 * std::size_t(incColumn[4 * std::size_t(k) + std::size_t(bb)]);
               for (int c = 0; c < 3; ++c) {
                 double* vc = v0 + 3 * c * rowLen + off;
                 for (int d = 0; d < 3; ++d) vc[d] += block(c, d);
@@ -1008,7 +1083,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     const auto solveStart = std::chrono::steady_clock::now();
     int iterations = 0;
     double residual = 0.0;
-    solver.solve(A, rhs, x, options.tolerance, iterations, residual);
+    solver.solve(A.scalar, rhs, x, options.tolerance, iterations, residual);
     rep.solveSeconds += seconds(solveStart);
     for (std::size_t i = 0; i < nFree; ++i)
       posed.row(freeNodes[i]) = x.segment<3>(Eigen::Index(3 * i)).transpose();

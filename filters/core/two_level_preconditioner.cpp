@@ -25,6 +25,31 @@ Mat3 rotationModes(const Vec3& d) {
   return S;
 }
 
+/// The block pattern of the symmetric completion of an upper-stored matrix (no values).
+BlockSparseMatrix3f symmetricPattern(const BlockSparseMatrix3f& upper) {
+  const int n = upper.rows();
+  BlockSparseMatrix3f full;
+  full.rowStart.assign(std::size_t(n) + 1, 0);
+  for (int i = 0; i < n; ++i)
+    for (int k = upper.rowStart[std::size_t(i)]; k < upper.rowStart[std::size_t(i) + 1]; ++k) {
+      const int j = upper.column[std::size_t(k)];
+      ++full.rowStart[std::size_t(i) + 1];
+      if (j != i) ++full.rowStart[std::size_t(j) + 1];
+    }
+  std::partial_sum(full.rowStart.begin(), full.rowStart.end(), full.rowStart.begin());
+  full.column.resize(std::size_t(full.rowStart.back()));
+  std::vector<int> fill(full.rowStart.begin(), full.rowStart.end() - 1);
+  // Rows in ascending order, so each row's columns come out ascending: first the lower ones (from
+  // earlier rows), then the row's own stored ones.
+  for (int i = 0; i < n; ++i)
+    for (int k = upper.rowStart[std::size_t(i)]; k < upper.rowStart[std::size_t(i) + 1]; ++k) {
+      const int j = upper.column[std::size_t(k)];
+      full.column[std::size_t(fill[std::size_t(i)]++)] = j;
+      if (j != i) full.column[std::size_t(fill[std::size_t(j)]++)] = i;
+    }
+  return full;
+}
+
 }  // namespace
 
 struct TwoLevelPreconditioner::Impl {
@@ -35,6 +60,8 @@ struct TwoLevelPreconditioner::Impl {
   std::vector<int> coarseOffset;    // first coarse row of each aggregate; back() = coarse size
   std::vector<int> neighbourStart, neighbour, neighbourPrefix;  // aggregate adjacency (sorted, with self)
   std::vector<int> valueStart, rowLength;                       // Ac's layout per aggregate (see aggregate())
+  std::vector<int> mirror;          // per neighbour entry (a, b): the index of the entry (b, a)
+  std::vector<double> halfProduct;  // upper fine matrices: the stored blocks' part of Ac (see update())
   Eigen::SparseMatrix<double> Ac;
   Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> llt;  // supernodal if that pays
   bool analyzed = false;
@@ -156,14 +183,18 @@ bool TwoLevelPreconditioner::aggregated() const { return !impl_->modes.empty(); 
 int TwoLevelPreconditioner::aggregates() const { return int(impl_->modes.size()); }
 int TwoLevelPreconditioner::coarseSize() const { return impl_->coarseOffset.empty() ? 0 : impl_->coarseOffset.back(); }
 
-void TwoLevelPreconditioner::aggregate(const BlockSparseMatrix3f& pattern, const Points& positions, int targetSize) {
-  const int n = pattern.rows();
+void TwoLevelPreconditioner::aggregate(const BlockSparseMatrix3f& matrix, const Points& positions, int targetSize) {
+  const int n = matrix.rows();
   if (positions.rows() != n) throw std::invalid_argument("TwoLevelPreconditioner: one position per block row needed");
   if (targetSize < 1) throw std::invalid_argument("TwoLevelPreconditioner: targetSize must be >= 1");
   impl_.reset(new Impl);
   Impl& s = *impl_;
   s.n = n;
   if (n == 0) return;
+  // The adjacency of the nodes: the pattern itself, or its symmetric completion.
+  BlockSparseMatrix3f completed;
+  if (matrix.upper) completed = symmetricPattern(matrix);
+  const BlockSparseMatrix3f& pattern = matrix.upper ? completed : matrix;
 
   // Grid cell size: start from the bounding box and rescale until the occupied cells hold about
   // targetSize nodes each (the body fills only part of its box).
@@ -330,6 +361,14 @@ void TwoLevelPreconditioner::aggregate(const BlockSparseMatrix3f& pattern, const
       }
     }
   s.Ac.outerIndexPtr()[nc] = s.valueStart.back();
+  s.mirror.resize(s.neighbour.size());
+  for (int a = 0; a < m; ++a)
+    for (int e = s.neighbourStart[std::size_t(a)]; e < s.neighbourStart[std::size_t(a) + 1]; ++e) {
+      const int b = s.neighbour[std::size_t(e)];
+      const auto bBegin = s.neighbour.begin() + s.neighbourStart[std::size_t(b)];
+      s.mirror[std::size_t(e)] =
+          int(std::lower_bound(bBegin, s.neighbour.begin() + s.neighbourStart[std::size_t(b) + 1], a) - s.neighbour.begin());
+    }
 }
 
 void TwoLevelPreconditioner::updateFine(const BlockSparseMatrix3f& A) {
@@ -371,8 +410,11 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
   // Ac = P^T A P, one aggregate (block row of Ac) per task: P_i = [I | S_i]. Row i of A P is first
   // summed per neighbouring aggregate b, C_ib = sum_j A_ij [I | S_j], then P_i^T C_ib added to the
   // block (a, b): a row touches few aggregates, so this is a third of the work of P_i^T A_ij P_j.
+  // An upper-stored A gives, over its stored blocks with the diagonal ones halved, R with
+  // Ac = R + R^T (each lower block is a stored one transposed): R first, then the sum.
   using Mat36 = Eigen::Matrix<double, 3, 6>;
-  double* values = s.Ac.valuePtr();
+  if (A.upper) s.halfProduct.resize(std::size_t(s.valueStart.back()));
+  double* values = A.upper ? s.halfProduct.data() : s.Ac.valuePtr();
 #pragma omp parallel
   {
     std::vector<int> slot(std::size_t(m), -1);
@@ -393,7 +435,7 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
         for (int q = A.rowStart[std::size_t(i)]; q < A.rowStart[std::size_t(i) + 1]; ++q) {
           const int j = A.column[std::size_t(q)];
           const Eigen::Map<const Eigen::Matrix<float, 3, 3, Eigen::RowMajor>> Af(A.values.data() + 9 * std::size_t(q));
-          const Mat3 Aij = Af.cast<double>();
+          const Mat3 Aij = (A.upper && j == i ? 0.5 : 1.0) * Af.cast<double>();
           const int sl = slot[std::size_t(s.aggregateOf[std::size_t(j)])];
           Mat36& C = row[std::size_t(sl)];
           if (!inRow[std::size_t(sl)]) {
@@ -421,6 +463,23 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
           for (int d = 0; d < s.modes[std::size_t(b)]; ++d)
             values[s.valueStart[std::size_t(a)] + c * len + s.neighbourPrefix[std::size_t(e)] + d] =
                 block[std::size_t(e - nb)](c, d);
+      }
+    }
+  }
+  if (A.upper) {
+    double* full = s.Ac.valuePtr();
+#pragma omp parallel for schedule(dynamic, 64)
+    for (int a = 0; a < m; ++a) {
+      const int ma = s.modes[std::size_t(a)], len = s.rowLength[std::size_t(a)];
+      for (int e = s.neighbourStart[std::size_t(a)]; e < s.neighbourStart[std::size_t(a) + 1]; ++e) {
+        const int b = s.neighbour[std::size_t(e)], back = s.mirror[std::size_t(e)];
+        const int mb = s.modes[std::size_t(b)], lenB = s.rowLength[std::size_t(b)];
+        for (int c = 0; c < ma; ++c)
+          for (int d = 0; d < mb; ++d) {
+            const int here = s.valueStart[std::size_t(a)] + c * len + s.neighbourPrefix[std::size_t(e)] + d;
+            const int there = s.valueStart[std::size_t(b)] + d * lenB + s.neighbourPrefix[std::size_t(back)] + c;
+            full[here] = s.halfProduct[std::size_t(here)] + s.halfProduct[std::size_t(there)];
+          }
       }
     }
   }

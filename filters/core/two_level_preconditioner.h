@@ -28,6 +28,7 @@ class TwoLevelPreconditioner : public BlockPreconditioner {
   /// the connected parts (in A's pattern) of the cells of a regular grid whose cell size gives about
   /// targetSize nodes per aggregate; aggregates of less than an eighth of that join their most
   /// connected neighbour. Depends on the pattern only, so it is done once for a fixed pattern.
+  /// The matrix may be upper-stored (BlockSparseMatrix3f::upper); update() then takes the same kind.
   void aggregate(const BlockSparseMatrix3f& pattern, const Points& positions, int targetSize);
   bool aggregated() const;
   int aggregates() const;
