@@ -138,6 +138,8 @@ int vtkReposeCorotationalRelax::RequestData(
         {
           tetLabels[static_cast<std::size_t>(c)] = static_cast<int>(labels->GetTuple1(c));
         }
+        // The fold-free continuation's path keeps the segments (see pathVolumeRegions).
+        options.pathVolumeRegions = options.volumeRegions;
         options.volumeRegions = repose::tissueSegments(options.volumeRegions, tetLabels);
       }
     }

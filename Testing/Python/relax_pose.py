@@ -12,6 +12,7 @@ import shutil
 import sys
 
 import numpy as np
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from repose_testing import SHARED, TEMP, TESTING, TINY, Mesh, check, run
 
@@ -145,5 +146,18 @@ tis = list(csv.DictReader(open(f"{out}/compare_tissues/fidelity.csv")))[0]
 worst = max(abs(float(tis[k]) - 1) for k in labels)
 check(worst < 1e-4 and worst_seg > 10 * worst,
       f"per tissue: every label's volume within 1e-4 of its rest volume (worst {worst:.1e})", failures)
-print(f"{26 - len(failures)} passed, {len(failures)} failed")
+# With tissues, the fold-free continuation runs its path on the segments and takes the tissues at its
+# end: forced, it completes and is kept, with no tet inverted and every label held.
+_, text_t, _ = run("pose", "--case", f"{TINY}/case", "--pose", pose, "--relax", "--relax-volume", "tissues",
+                   "--relax-continuation", "always", "--out", f"{out}/continuation_tissues")
+m_t = re.search(r"inverted tets (\d+) -> (\d+).*fold-free continuation (\d+) steps \(kept\)", text_t)
+path_tissues = Mesh(f"{out}/continuation_tissues/posed_mesh.vtu").points
+tet_label = vtk_to_numpy(rest_mesh.grid.GetCellData().GetArray("Label"))
+label_volume = lambda p, l: signed_volumes(p)[tet_label == l].sum()
+worst_path = max(abs(label_volume(path_tissues, l) / label_volume(rest, l) - 1) for l in np.unique(tet_label))
+check(m_t is not None and int(m_t.group(2)) == 0 and np.all(signed_volumes(path_tissues)[pinned < 4] > 0) and
+      worst_path < 1e-4,
+      "tissues: the forced continuation completes and is kept" + (f" ({m_t.group(3)} steps)" if m_t else "") +
+      f", no tet inverted, every label within {worst_path:.1e} of its rest volume", failures)
+print(f"{27 - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)

@@ -342,18 +342,31 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
 
   // Volume regions (see CorotationalOptions::volumeRegions): tets with a free node only, the others
   // keep their volume anyway. The pressure of each region follows the last evaluated pose.
+  // useRegions() sets them up (again: the continuation's path may use pathVolumeRegions), with the
+  // multipliers at 0.
   int nRegions = 0;
-  for (int r : options.volumeRegions) nRegions = std::max(nRegions, r + 1);
-  std::vector<int> region(nRegions > 0 ? nT : 0, -1);
-  std::vector<double> regionRest(std::size_t(nRegions), 0.0), regionVolume(std::size_t(nRegions), 0.0),
-      regionPressure(std::size_t(nRegions), 0.0), regionMultiplier(std::size_t(nRegions), 0.0);
+  std::vector<int> region;
+  std::vector<double> regionRest, regionVolume, regionPressure, regionMultiplier;
   LowRankTerm3 regionCoupling;
-  if (nRegions > 0) {
+  const std::size_t sumBlock = 512, nSumBlocks = (nT + sumBlock - 1) / sumBlock;
+  std::vector<double> blockSums;  // evaluate()'s per-block sums: energy, then each region's volume
+  auto useRegions = [&](const std::vector<int>& ids) {
+    nRegions = 0;
+    for (int r : ids) nRegions = std::max(nRegions, r + 1);
+    region.assign(nRegions > 0 ? nT : 0, -1);
+    regionRest.assign(std::size_t(nRegions), 0.0);
+    regionVolume.assign(std::size_t(nRegions), 0.0);
+    regionPressure.assign(std::size_t(nRegions), 0.0);
+    regionMultiplier.assign(std::size_t(nRegions), 0.0);
+    regionCoupling = LowRankTerm3{};
+    blockSums.assign(nSumBlocks * std::size_t(1 + nRegions), 0.0);
+    solver.setLowRank(nRegions > 0 ? &regionCoupling : nullptr);
+    if (nRegions == 0) return;
     for (std::size_t t = 0; t < nT; ++t) {
       bool hasFree = false;
       for (int a = 0; a < 4; ++a) hasFree = hasFree || fixedBone[std::size_t(tets(Eigen::Index(t), a))] < 0;
-      if (!hasFree || options.volumeRegions[t] < 0) continue;
-      region[t] = options.volumeRegions[t];
+      if (!hasFree || ids[t] < 0) continue;
+      region[t] = ids[t];
       regionRest[std::size_t(region[t])] += restTets[t].volume;
     }
     regionCoupling.weight.resize(std::size_t(nRegions));
@@ -373,8 +386,8 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       regionCoupling.rowStart[i + 1] = int(regionCoupling.term.size());
     }
     regionCoupling.vector.assign(3 * regionCoupling.term.size(), 0.0);
-    solver.setLowRank(&regionCoupling);
-  }
+  };
+  useRegions(options.volumeRegions);
 
   std::vector<char> hasFree(nT, 0);  // per tet: some node of it is free
   for (std::size_t t = 0; t < nT; ++t)
@@ -386,8 +399,6 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   // The sums are taken per fixed block of tets and then in block order, so that they do not depend
   // on how the threads split the work: a solve gives the same result every run (the line search's
   // accept / reject decisions, and through them the continuation's path, hang on the last digits).
-  const std::size_t sumBlock = 512, nSumBlocks = (nT + sumBlock - 1) / sumBlock;
-  std::vector<double> blockSums(nSumBlocks * std::size_t(1 + nRegions));
   std::vector<int> blockCounts(nSumBlocks);
   auto evaluate = [&](const Points& x, int& inverted) {
     parallelFor(nSumBlocks, [&](std::size_t bb, std::size_t be) {
@@ -619,7 +630,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         int trialInverted = 0;
         const double trialEnergy = evaluate(trial, trialInverted);
         if (trialInverted <= inverted && trialEnergy <= energy + 1e-4 * alpha * std::min(slope, 0.0)) {
-          smallDecrease = energy - trialEnergy < options.energyTolerance * energy;
+          smallDecrease = energy - trialEnergy < options.energyTolerance * energy && alpha * maxMove < 10.0 * stepLimit;
           energy = trialEnergy;
           inverted = trialInverted;
           accepted = true;
@@ -694,7 +705,12 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     const bool directConverged = rep.converged;
     const std::vector<char> directBarrier = barrier;
     const std::vector<double> directMultiplier = regionMultiplier;
-    std::fill(regionMultiplier.begin(), regionMultiplier.end(), 0.0);  // the rest shape has no pressure
+    // The path's own regions, if any; the multipliers start at 0 (the rest shape has no pressure).
+    const bool pathRegions = !options.pathVolumeRegions.empty();
+    if (pathRegions)
+      useRegions(options.pathVolumeRegions);
+    else
+      std::fill(regionMultiplier.begin(), regionMultiplier.end(), 0.0);
     const BonePath path(rest, direct, fixedBone, options.boneParents);
     std::vector<int> pathNodes;  // the Dirichlet nodes of the tets
     {
@@ -753,6 +769,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       sHistory.push_back(s);
       const std::size_t window = 20;
       if (ds < 1e-6 || (sHistory.size() > window && s - sHistory[sHistory.size() - 1 - window] < 1e-3)) break;
+      if (s >= 1.0 && pathRegions) useRegions(options.volumeRegions);  // the pose's own regions from here
       energy = evaluate(posed, inverted);
       firstNorm = -1.0;  // each correction's forcing terms start afresh
       if (s >= 1.0 || options.continuationCorrections > 0)
@@ -766,6 +783,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     } else {
       posed = direct;
       barrier = directBarrier;
+      if (pathRegions && s < 1.0) useRegions(options.volumeRegions);
       regionMultiplier = directMultiplier;
       energy = evaluate(posed, inverted);
       rep.converged = directConverged;
@@ -819,14 +837,16 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     throw std::invalid_argument("relaxCorotational: inversionPenalty must be >= 0");
   if (!(options.inversionThreshold >= 0.0 && options.inversionThreshold < 1.0))
     throw std::invalid_argument("relaxCorotational: inversionThreshold must be in [0, 1)");
-  if (!options.volumeRegions.empty() && Eigen::Index(options.volumeRegions.size()) != nT)
-    throw std::invalid_argument("relaxCorotational: volumeRegions has " + std::to_string(options.volumeRegions.size()) +
-                                " entries but the mesh has " + std::to_string(nT) + " tets");
-  for (std::size_t t = 0; t < options.volumeRegions.size(); ++t)
-    if (options.volumeRegions[t] >= nT)  // more regions than tets: not a region id
-      throw std::invalid_argument("relaxCorotational: volumeRegions[" + std::to_string(t) + "] = " +
-                                  std::to_string(options.volumeRegions[t]) + " is not below the tet count " +
-                                  std::to_string(nT));
+  for (const auto& [name, ids] : {std::make_pair("volumeRegions", &options.volumeRegions),
+                                   std::make_pair("pathVolumeRegions", &options.pathVolumeRegions)}) {
+    if (!ids->empty() && Eigen::Index(ids->size()) != nT)
+      throw std::invalid_argument(std::string("relaxCorotational: ") + name + " has " + std::to_string(ids->size()) +
+                                  " entries but the mesh has " + std::to_string(nT) + " tets");
+    for (std::size_t t = 0; t < ids->size(); ++t)
+      if ((*ids)[t] >= nT)  // more regions than tets: not a region id
+        throw std::invalid_argument(std::string("relaxCorotational: ") + name + "[" + std::to_string(t) + "] = " +
+                                    std::to_string((*ids)[t]) + " is not below the tet count " + std::to_string(nT));
+  }
   if (!(options.regionVolumeStiffness >= 0.0) || !std::isfinite(options.regionVolumeStiffness))
     throw std::invalid_argument("relaxCorotational: regionVolumeStiffness must be >= 0");
   if (options.startCorrection.size() > 0 &&

@@ -53,7 +53,10 @@ struct CorotationalOptions {
   /// FixedCorotated: stops when the largest node move of a step is below stepTolerance times the
   /// mean rest edge length (then det F is settled to about that relative accuracy).
   double stepTolerance = 1e-3;
-  /// FixedCorotated: also stops when an iteration lowers the energy by less than this fraction.
+  /// FixedCorotated: also stops when an iteration lowers the energy by less than this fraction with
+  /// a move below 10 stepTolerance edge lengths. (Not on a small decrease alone: a small region's
+  /// volume term is a tiny part of the energy, and Newton would stop with the region's volume off,
+  /// e.g. by 6e-3 after the continuation with tissue regions, where 5e-5 is reached.)
   double energyTolerance = 1e-6;
   /// FixedCorotated: a penalty inversionPenalty * lambda * (inversionThreshold - det F)^2 is added
   /// to each tet's energy density below det F = inversionThreshold. The fixed-corotated energy is
@@ -88,6 +91,12 @@ struct CorotationalOptions {
   /// on the small phantom: 1.5e-4, 1.7e-5, then 1.9e-5). Raising the stiffness instead works too,
   /// but slows CG (stiffness 300: twice the CG iterations) where an update costs a few Newton steps.
   std::vector<int> volumeRegions;
+  /// The regions of the fold-free continuation's path before its end (empty: volumeRegions), the
+  /// same form. Coarser regions than the pose's keep the path moving: with a term per tissue, a thin
+  /// tissue squeezed between bones must keep its own volume at every step, and the path can stall
+  /// there (tiny phantom's test pose: 170 steps and not kept, against 29 with body segments).
+  /// volumeRegions take over at the path's end, for its last Newton solve and multiplier updates.
+  std::vector<int> pathVolumeRegions;
   double regionVolumeStiffness = 30.0;
   double regionVolumeTolerance = 1e-5;
   int maxRegionVolumeUpdates = 4;
