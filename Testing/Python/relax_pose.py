@@ -159,5 +159,12 @@ check(m_t is not None and int(m_t.group(2)) == 0 and np.all(signed_volumes(path_
       worst_path < 1e-4,
       "tissues: the forced continuation completes and is kept" + (f" ({m_t.group(3)} steps)" if m_t else "") +
       f", no tet inverted, every label within {worst_path:.1e} of its rest volume", failures)
-print(f"{27 - len(failures)} passed, {len(failures)} failed")
+# Walk frame 192 from its skinned pose: the direct solve leaves one tet folded, and the continuation's
+# path stalls at s = 0.45 with predictors alone; relaxing the tissue there lets it complete.
+run("animate", "--case", f"{TINY}/case", "--bvh", bvh, "--frames", "192:193:4", "--relax", "--out", f"{out}/frame192")
+row192 = list(csv.DictReader(open(f"{out}/frame192/frames.csv")))[0]
+check(int(row192["inverted_tets"]) == 0 and int(row192["continuation_steps"]) > 0,
+      f"walk frame 192: the continuation completes ({row192['continuation_steps']} steps), "
+      f"{row192['inverted_tets']} tets inverted", failures)
+print(f"{28 - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)

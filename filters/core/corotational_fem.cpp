@@ -388,6 +388,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     regionCoupling.vector.assign(3 * regionCoupling.term.size(), 0.0);
   };
   useRegions(options.volumeRegions);
+  // Set when the continuation's path regions give way to volumeRegions at its end: the new terms
+  // start far from their targets (tiny phantom, tissues: 6e-3) while their energy is a tiny part of
+  // the total, so from there on a small energy decrease ends Newton only with a small step too.
+  bool regionsSwitched = false;
 
   std::vector<char> hasFree(nT, 0);  // per tet: some node of it is free
   for (std::size_t t = 0; t < nT; ++t)
@@ -630,7 +634,8 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         int trialInverted = 0;
         const double trialEnergy = evaluate(trial, trialInverted);
         if (trialInverted <= inverted && trialEnergy <= energy + 1e-4 * alpha * std::min(slope, 0.0)) {
-          smallDecrease = energy - trialEnergy < options.energyTolerance * energy && alpha * maxMove < 10.0 * stepLimit;
+          smallDecrease = energy - trialEnergy < options.energyTolerance * energy &&
+                          (!regionsSwitched || alpha * maxMove < 10.0 * stepLimit);
           energy = trialEnergy;
           inverted = trialInverted;
           accepted = true;
@@ -676,16 +681,12 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   // multiplier takes the pressure the penalty holds, so the next minimum needs less excess for it.
   auto keepRegionVolumes = [&]() {
     if (!(options.regionVolumeStiffness > 0.0)) return;  // no penalty: no pressure to fold in
-    double lastWorst = std::numeric_limits<double>::infinity();
     for (int update = 0; update < options.maxRegionVolumeUpdates; ++update) {
       double worst = 0;
       for (int r = 0; r < nRegions; ++r)
         if (regionRest[std::size_t(r)] > 0)
           worst = std::max(worst, std::abs(regionVolume[std::size_t(r)] / regionRest[std::size_t(r)] - 1.0));
-      // An update that did not halve the error is the last: the inner Newton stops at an energy
-      // change of energyTolerance, and below that the multipliers only follow its rounding.
-      if (worst <= options.regionVolumeTolerance || worst > 0.5 * lastWorst) return;
-      lastWorst = worst;
+      if (worst <= options.regionVolumeTolerance) return;
       regionMultiplier = regionPressure;
       ++rep.regionVolumeUpdates;
       energy = evaluate(posed, inverted);
@@ -732,6 +733,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     Points move = Points::Zero(posed.rows(), 3);
     Eigen::VectorXd predictor(n);
     double s = 0.0, ds = 0.125;
+    int rescues = 0;  // relaxing Newton solves after a stall
     std::vector<double> sHistory;  // s after each step
     while (s < 1.0 && rep.continuationSteps < options.maxContinuationSteps) {
       ++rep.continuationSteps;
@@ -759,7 +761,23 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
         accepted = invertedWithFreeNode(trial) == 0;
         if (accepted) break;
       }
-      if (!accepted) break;
+      // A stall (no fold-free fraction of the predictor, or steps that stay short, see below) may
+      // be the tissue itself, carried along by predictors alone, blocking the way: it is relaxed
+      // at this s (Newton, the bones held) and the path tried again, a few times per path.
+      auto relaxHere = [&]() {
+        if (rescues >= 3) return false;
+        ++rescues;
+        energy = evaluate(posed, inverted);
+        firstNorm = -1.0;
+        newton(std::max(1, options.maxNewtonIterations / 2));
+        ds = std::max(ds, 1e-3);
+        sHistory.clear();
+        return true;
+      };
+      if (!accepted) {
+        if (relaxHere()) continue;
+        break;
+      }
       s = alpha == 1.0 ? target : s + alpha * (target - s);
       posed = trial;
       ds = alpha == 1.0 ? std::min(2.0 * ds, 0.5) : alpha * ds;
@@ -768,8 +786,14 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       // again (tiny phantom, squat frames 372 and 388: steps below 1e-4, then the end of the path).
       sHistory.push_back(s);
       const std::size_t window = 20;
-      if (ds < 1e-6 || (sHistory.size() > window && s - sHistory[sHistory.size() - 1 - window] < 1e-3)) break;
-      if (s >= 1.0 && pathRegions) useRegions(options.volumeRegions);  // the pose's own regions from here
+      if (ds < 1e-6 || (sHistory.size() > window && s - sHistory[sHistory.size() - 1 - window] < 1e-3)) {
+        if (relaxHere()) continue;
+        break;
+      }
+      if (s >= 1.0 && pathRegions) {  // the pose's own regions from here
+        useRegions(options.volumeRegions);
+        regionsSwitched = true;
+      }
       energy = evaluate(posed, inverted);
       firstNorm = -1.0;  // each correction's forcing terms start afresh
       if (s >= 1.0 || options.continuationCorrections > 0)

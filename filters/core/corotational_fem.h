@@ -53,10 +53,10 @@ struct CorotationalOptions {
   /// FixedCorotated: stops when the largest node move of a step is below stepTolerance times the
   /// mean rest edge length (then det F is settled to about that relative accuracy).
   double stepTolerance = 1e-3;
-  /// FixedCorotated: also stops when an iteration lowers the energy by less than this fraction with
-  /// a move below 10 stepTolerance edge lengths. (Not on a small decrease alone: a small region's
-  /// volume term is a tiny part of the energy, and Newton would stop with the region's volume off,
-  /// e.g. by 6e-3 after the continuation with tissue regions, where 5e-5 is reached.)
+  /// FixedCorotated: also stops when an iteration lowers the energy by less than this fraction
+  /// (after the continuation's path has switched to volumeRegions, only with a move below 10
+  /// stepTolerance edge lengths too: the new region terms start far from their targets but are a
+  /// tiny part of the energy, and Newton stopped with tissue regions 6e-3 off, where 5e-5 is reached).
   double energyTolerance = 1e-6;
   /// FixedCorotated: a penalty inversionPenalty * lambda * (inversionThreshold - det F)^2 is added
   /// to each tet's energy density below det F = inversionThreshold. The fixed-corotated energy is
@@ -86,9 +86,7 @@ struct CorotationalOptions {
   /// phantom's walk, bodies 0.12-0.35 % short at stiffness 3): after Newton has converged, each
   /// region's pressure is folded into a fixed multiplier term Lambda_r (V_r - V_r0) (augmented
   /// Lagrangian) and Newton resumes, until every region is within regionVolumeTolerance of its rest
-  /// volume, after maxRegionVolumeUpdates such updates, or after an update that did not halve the
-  /// worst region's error (the inner Newton's own accuracy then bounds it; the 45-degree benchmark pose
-  /// on the small phantom: 1.5e-4, 1.7e-5, then 1.9e-5). Raising the stiffness instead works too,
+  /// volume or after maxRegionVolumeUpdates such updates. Raising the stiffness instead works too,
   /// but slows CG (stiffness 300: twice the CG iterations) where an update costs a few Newton steps.
   std::vector<int> volumeRegions;
   /// The regions of the fold-free continuation's path before its end (empty: volumeRegions), the
@@ -113,7 +111,10 @@ struct CorotationalOptions {
   enum Continuation { Never, IfInverted, Always };
   Continuation continuation = IfInverted;
   /// ... in at most this many steps (the step length adapts: doubled after a full step, cut to the
-  /// accepted fraction otherwise); the direct result is kept if the path is not completed.
+  /// accepted fraction otherwise); the direct result is kept if the path is not completed. Where the
+  /// path stalls, the tissue is first relaxed there (Newton with the bones held, at most 3 times per
+  /// path): carried by predictors alone it can block the way (walk frame 192, tiny phantom: stalled
+  /// at s = 0.45, completed after one such solve).
   int maxContinuationSteps = 200;
   /// ... and this many Newton corrections per intermediate step (the last one gets
   /// maxNewtonIterations). The predictor is itself a Newton step of the moved problem (it also takes
