@@ -880,21 +880,24 @@ TEST(TetUntangling, TetsWithOnlyFixedNodesAreReportedNotMoved) {
   EXPECT_EQ((posed - before).cwiseAbs().maxCoeff(), 0.0);
 }
 
-TEST(BlockSparseCg, SolvesAnSpdBlockSystemLikeADenseSolver) {
-  // A random SPD matrix of 3x3 blocks with a sparse block pattern (a chain with skips).
-  const int n = 40;
-  std::mt19937 rng(11);
+namespace {
+
+// A random SPD matrix of 3x3 blocks: block (i, i + d) for each offset d (and its transpose), and a
+// diagonal of diagonal + |N(0, 1)| (diagonally dominant). dense gets the matrix; the result holds
+// its nonzero blocks in float, both triangles.
+repose::BlockSparseMatrix3f randomSpdBlocks(int n, std::initializer_list<int> offsets, double diagonal,
+                                            std::mt19937& rng, Eigen::MatrixXd& dense) {
   std::normal_distribution<double> g;
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
   for (int i = 0; i < n; ++i)
-    for (int j : {i + 1, i + 3})
-      if (j < n) {
+    for (int d : offsets)
+      if (i + d < n) {
         Eigen::Matrix3d B;
         for (int k = 0; k < 9; ++k) B(k / 3, k % 3) = 0.3 * g(rng);
-        dense.block<3, 3>(3 * i, 3 * j) = B;
-        dense.block<3, 3>(3 * j, 3 * i) = B.transpose();
+        dense.block<3, 3>(3 * i, 3 * (i + d)) = B;
+        dense.block<3, 3>(3 * (i + d), 3 * i) = B.transpose();
       }
-  for (int i = 0; i < 3 * n; ++i) dense(i, i) = 4.0 + std::abs(g(rng));  // diagonally dominant: SPD
+  for (int i = 0; i < 3 * n; ++i) dense(i, i) = diagonal + std::abs(g(rng));
   repose::BlockSparseMatrix3f A;
   A.rowStart.push_back(0);
   for (int i = 0; i < n; ++i) {
@@ -906,6 +909,18 @@ TEST(BlockSparseCg, SolvesAnSpdBlockSystemLikeADenseSolver) {
       }
     A.rowStart.push_back(int(A.column.size()));
   }
+  return A;
+}
+
+}  // namespace
+
+TEST(BlockSparseCg, SolvesAnSpdBlockSystemLikeADenseSolver) {
+  // A random SPD matrix of 3x3 blocks with a sparse block pattern (a chain with skips).
+  const int n = 40;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd dense;
+  const repose::BlockSparseMatrix3f A = randomSpdBlocks(n, {1, 3}, 4.0, rng, dense);
   Eigen::MatrixXd asFloat = dense.cast<float>().cast<double>();  // the operator CG actually sees
   Eigen::VectorXd b(3 * n);
   for (int i = 0; i < 3 * n; ++i) b(i) = g(rng);
@@ -1054,27 +1069,8 @@ TEST(BlockSparseCg, UpperStorageIsTheSameOperator) {
   const int n = 400;
   std::mt19937 rng(17);
   std::normal_distribution<double> g;
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  for (int i = 0; i < n; ++i)
-    for (int j : {i + 1, i + 7, i + n / 2})
-      if (j < n) {
-        Eigen::Matrix3d B;
-        for (int k = 0; k < 9; ++k) B(k / 3, k % 3) = 0.3 * g(rng);
-        dense.block<3, 3>(3 * i, 3 * j) = B;
-        dense.block<3, 3>(3 * j, 3 * i) = B.transpose();
-      }
-  for (int i = 0; i < 3 * n; ++i) dense(i, i) = 5.0 + std::abs(g(rng));
-  repose::BlockSparseMatrix3f A;
-  A.rowStart.push_back(0);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < n; ++j)
-      if (dense.block<3, 3>(3 * i, 3 * j).cwiseAbs().maxCoeff() > 0) {
-        A.column.push_back(j);
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) A.values.push_back(float(dense(3 * i + r, 3 * j + c)));
-      }
-    A.rowStart.push_back(int(A.column.size()));
-  }
+  Eigen::MatrixXd dense;
+  const repose::BlockSparseMatrix3f A = randomSpdBlocks(n, {1, 7, n / 2}, 5.0, rng, dense);
   const repose::BlockSparseMatrix3f U = upperPart(A);
   EXPECT_TRUE(U.upper);
   EXPECT_LT(U.column.size(), 0.6 * double(A.column.size()));
