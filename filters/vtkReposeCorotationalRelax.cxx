@@ -115,6 +115,7 @@ int vtkReposeCorotationalRelax::RequestData(
     options.regionVolumeStiffness = this->RegionVolumeStiffness;
     options.regionVolumeTolerance = this->RegionVolumeTolerance;
     options.inversionBarrier = this->InversionBarrier;
+    options.untangleRelaxRings = this->UntangleRelaxRings;
     options.continuation = this->Continuation == 2 ? repose::CorotationalOptions::Always
       : this->Continuation == 1                    ? repose::CorotationalOptions::IfInverted
                                                    : repose::CorotationalOptions::Never;
@@ -183,6 +184,7 @@ int vtkReposeCorotationalRelax::RequestData(
     this->InvertedAfter = report.invertedAfter;
     this->InvertedRigidAfter = report.invertedRigid;
     this->UntangledNodes = report.untangledNodes;
+    this->UntangleNewtonIterations = report.untangleNewtonIterations;
     this->RegionVolumeUpdates = report.regionVolumeUpdates;
     this->LastRelaxTime = report.seconds;
     this->LastAssemblyTime = report.assemblySeconds;
@@ -216,6 +218,7 @@ void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "Model: " << (this->Model == 1 ? "FixedCorotated" : "Linear") << "\n";
   os << indent << "MaxNewtonIterations: " << this->MaxNewtonIterations << "\n";
+  os << indent << "UntangleRelaxRings: " << this->UntangleRelaxRings << "\n";
   os << indent << "StepTolerance: " << this->StepTolerance << "\n";
   os << indent << "EnergyTolerance: " << this->EnergyTolerance << "\n";
   os << indent << "Continuation: " << this->Continuation << "\n";

@@ -68,6 +68,11 @@ public:
   vtkSetMacro(InversionBarrier, bool);
   vtkGetMacro(InversionBarrier, bool);
   vtkBooleanMacro(InversionBarrier, bool);
+  /// Model 1: after an untangling round, the moved nodes and this many rings of neighbours are
+  /// relaxed on their own, then the whole mesh once (default 2; see
+  /// repose::CorotationalOptions::untangleRelaxRings). -1: the whole mesh after every round.
+  vtkSetClampMacro(UntangleRelaxRings, int, -1, 1000);
+  vtkGetMacro(UntangleRelaxRings, int);
   /// Model 1 with the barrier: when the solve leaves a fold (inverted tets with a free node), solve
   /// again by a fold-free continuation from the rest shape (see
   /// repose::CorotationalOptions::continuation). 0: never, 1: if tets stay inverted (default),
@@ -100,6 +105,8 @@ public:
   vtkGetMacro(InvertedRigidAfter, int);
   /// Node moves made by the untangling step (0 when the solve left nothing inverted).
   vtkGetMacro(UntangledNodes, int);
+  /// Newton iterations of the neighbourhood solves after untangling (not in GetNewtonIterations()).
+  vtkGetMacro(UntangleNewtonIterations, int);
   /// Region-volume multiplier updates made (see RegionVolumeTolerance).
   vtkGetMacro(RegionVolumeUpdates, int);
   /// Steps of the fold-free continuation (0: it did not run), and whether its result was kept.
@@ -134,6 +141,7 @@ protected:
   double RegionVolumeTolerance = 1e-5;
   int RegionVolumeUpdates = 0;
   bool InversionBarrier = true;
+  int UntangleRelaxRings = 2;
   int Continuation = 1;
   char* SkeletonJSON = nullptr;
   bool WarmStart = false;
@@ -150,6 +158,7 @@ protected:
   int InvertedAfter = 0;
   int InvertedRigidAfter = 0;
   int UntangledNodes = 0;
+  int UntangleNewtonIterations = 0;
   double LastAssemblyTime = 0.0;
   double LastSolveTime = 0.0;
   double LastUntangleTime = 0.0;

@@ -600,21 +600,36 @@ TEST(FixedCorotatedFem, SharplyBentBarUnfoldsAndKeepsVolume) {
 // child), warm-started from a fold: the free nodes collapsed onto a curve. Newton and the untangling settle
 // in a local minimum with a tet turned inside out; the continuation from the rest shape gets no fold
 // on the way and ends in the minimum that a good warm start (the linear blend) reaches directly.
-TEST(FixedCorotatedFem, FoldFreeContinuationLeavesNoFoldAndFindsTheMinimum) {
-  const Box b = makeBox(12, 4, 4, 1.0);
-  std::vector<int> fixed(std::size_t(b.nodes.rows()), -1);
-  Points blended = b.nodes, folded = b.nodes;
+struct FoldedBar {
+  Box b = makeBox(12, 4, 4, 1.0);
+  std::vector<int> fixed;
+  Points blended, folded;
+};
+FoldedBar foldedBar() {
+  FoldedBar f;
+  const Box& b = f.b;
+  f.fixed.assign(std::size_t(b.nodes.rows()), -1);
+  f.blended = f.folded = b.nodes;
   const Eigen::Vector3d hinge(6, 2, 0);
   const Eigen::Matrix3d Rend = Eigen::AngleAxisd(1.5, Eigen::Vector3d::UnitY()).toRotationMatrix();
   for (Eigen::Index i = 0; i < b.nodes.rows(); ++i) {
     const double w = std::clamp((b.nodes(i, 0) - 4.0) / 4.0, 0.0, 1.0);
     const Eigen::Vector3d p = b.nodes.row(i).transpose();
-    blended.row(i) = ((1 - w) * p + w * (Rend * (p - hinge) + hinge)).transpose();
-    fixed[std::size_t(i)] = w == 0.0 ? 0 : w == 1.0 ? 1 : -1;
+    f.blended.row(i) = ((1 - w) * p + w * (Rend * (p - hinge) + hinge)).transpose();
+    f.fixed[std::size_t(i)] = w == 0.0 ? 0 : w == 1.0 ? 1 : -1;
     const Eigen::Vector3d c(6, 2, 2);  // all free rest nodes here, then blended
     const Eigen::Vector3d collapsed = (1 - w) * c + w * (Rend * (c - hinge) + hinge);
-    folded.row(i) = fixed[std::size_t(i)] < 0 ? Eigen::RowVector3d(collapsed.transpose()) : Eigen::RowVector3d(blended.row(i));
+    f.folded.row(i) =
+        f.fixed[std::size_t(i)] < 0 ? Eigen::RowVector3d(collapsed.transpose()) : Eigen::RowVector3d(f.blended.row(i));
   }
+  return f;
+}
+
+TEST(FixedCorotatedFem, FoldFreeContinuationLeavesNoFoldAndFindsTheMinimum) {
+  const FoldedBar f = foldedBar();
+  const Box& b = f.b;
+  const std::vector<int>& fixed = f.fixed;
+  const Points &blended = f.blended, &folded = f.folded;
   CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
   opt.stepTolerance = 1e-5;
   opt.boneParents = {-1, 0};
@@ -656,6 +671,79 @@ TEST(FixedCorotatedFem, FoldFreeContinuationLeavesNoFoldAndFindsTheMinimum) {
   CorotationalReport blocked;
   relax(crushed, CorotationalOptions::Always, blocked);
   EXPECT_FALSE(blocked.continuationUsed);
+}
+
+// relaxNeighbourhood is the whole mesh's minimum over the neighbourhood's nodes: the same as a
+// whole-mesh solve with every other free node held, nodes outside it untouched; with rings enough
+// to reach every free node, the whole-mesh solve itself.
+TEST(FixedCorotatedFem, NeighbourhoodSolveIsTheWholeSolveWithTheRestHeld) {
+  const StampedBlock s = stampedBlock(8, 4, 6, 3, 5, 0.8);
+  const Box& b = s.b;
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
+  opt.untangle = false;  // as in the neighbourhood's own solve
+  opt.continuation = CorotationalOptions::Never;
+  const int centre = b.id(4, 2, 4);
+  std::vector<char> unknown(std::size_t(b.nodes.rows()), 0);  // one ring: the centre and its free neighbours
+  for (Eigen::Index t = 0; t < b.tets.rows(); ++t)
+    if ((b.tets.row(t).array() == centre).any())
+      for (int c = 0; c < 4; ++c) unknown[std::size_t(b.tets(t, c))] = s.fixed[std::size_t(b.tets(t, c))] < 0;
+  std::vector<int> held = s.fixed;
+  for (std::size_t v = 0; v < held.size(); ++v)
+    if (!unknown[v] && held[v] < 0) held[v] = 0;
+  Points expected = s.stamped;
+  repose::relaxCorotational(b.nodes, b.tets, held, expected, opt);
+
+  Points x = s.stamped;
+  CorotationalReport rep;
+  repose::relaxNeighbourhood(b.nodes, b.tets, s.fixed, x, {centre}, 1, opt, &rep);
+  EXPECT_GT(rep.newtonIterations, 0);
+  EXPECT_GT((x - s.stamped).cwiseAbs().maxCoeff(), 1e-3);  // the stamp's push reaches the centre
+  EXPECT_LT((x - expected).cwiseAbs().maxCoeff(), 1e-6);
+  for (Eigen::Index v = 0; v < x.rows(); ++v)
+    if (!unknown[std::size_t(v)]) EXPECT_EQ(x.row(v), s.stamped.row(v)) << "node " << v;
+
+  Points whole = s.stamped, y = s.stamped;
+  repose::relaxCorotational(b.nodes, b.tets, s.fixed, whole, opt);
+  repose::relaxNeighbourhood(b.nodes, b.tets, s.fixed, y, {centre}, 20, opt);
+  EXPECT_LT((y - whole).cwiseAbs().maxCoeff(), 1e-6);
+
+  // Fixed centre nodes only: nothing to solve. A node out of range: refused, posed untouched.
+  Points z = s.stamped;
+  repose::relaxNeighbourhood(b.nodes, b.tets, s.fixed, z, {b.id(4, 2, 0)}, 3, opt, &rep);
+  EXPECT_EQ(rep.newtonIterations, 0);
+  EXPECT_EQ(z, s.stamped);
+  EXPECT_THROW(repose::relaxNeighbourhood(b.nodes, b.tets, s.fixed, z, {int(b.nodes.rows())}, 1, opt),
+               std::invalid_argument);
+  EXPECT_EQ(z, s.stamped);
+}
+
+// The folded bar's direct solve (the continuation off) leaves tets that the untangling frees, over
+// several rounds. Relaxing only each round's moved nodes and their neighbours, then the whole mesh
+// once, ends where a whole-mesh solve after every round does, in fewer whole-mesh Newton steps.
+TEST(FixedCorotatedFem, UntanglingRoundsRelaxTheNeighbourhoodThenTheWholeMesh) {
+  const FoldedBar f = foldedBar();
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
+  opt.stepTolerance = 1e-5;
+  opt.continuation = CorotationalOptions::Never;
+  CorotationalReport local, whole;
+  Points x = f.folded, y = f.folded;
+  opt.untangleRelaxRings = 2;
+  repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, x, opt, &local);
+  opt.untangleRelaxRings = -1;
+  repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, y, opt, &whole);
+  std::printf("untangling rounds: %d + %d neighbourhood Newton steps against %d whole-mesh ones; energy %.6f, %.6f\n",
+              local.newtonIterations, local.untangleNewtonIterations, whole.newtonIterations, local.energyAfter,
+              whole.energyAfter);
+  EXPECT_GT(local.untangledNodes, 0);
+  EXPECT_GT(local.untangleNewtonIterations, 0);
+  EXPECT_EQ(whole.untangleNewtonIterations, 0);
+  EXPECT_LT(local.newtonIterations, whole.newtonIterations);
+  EXPECT_EQ(local.invertedAfter, whole.invertedAfter);
+  EXPECT_LE(local.invertedAfter, local.invertedBefore);
+  EXPECT_NEAR(local.energyAfter, whole.energyAfter, 1e-6 * whole.energyAfter);
+  EXPECT_LT((x - y).cwiseAbs().maxCoeff(), 1e-3);
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    if (f.fixed[std::size_t(i)] >= 0) EXPECT_EQ(x.row(i), f.folded.row(i));
 }
 
 TEST(CorotationalFem, BadInput) {

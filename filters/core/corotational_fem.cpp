@@ -147,19 +147,8 @@ class SpdSolver {
              double& residual) {
     if (options_.preconditioner == CorotationalOptions::BlockJacobi ||
         options_.preconditioner == CorotationalOptions::TwoLevel) {
-      // The float matrix solves for the correction to x only (the residual is formed in double), so
-      // its rounding stays relative to the correction, not to the node coordinates.
-      toBlocks(A);
-      blocks_.lowRank = lowRank_;
-      // (Newton starts each solve from x = 0: then the residual is b, without a product with A.)
-      const bool fromZero = (x.array() == 0.0).all();
-      Eigen::VectorXd r0 = fromZero ? Eigen::VectorXd(b) : Eigen::VectorXd(b - A * x);
-      if (lowRank_ && !lowRank_->empty() && !fromZero) {
-        Eigen::VectorXd lx = Eigen::VectorXd::Zero(x.size());
-        lowRank_->multiplyAdd(x, lx);
-        r0 -= lx;
-      }
-      solveCorrection(blocks_, b, r0, x, tolerance, iterations, residual);
+      // Their matrices are assembled as float blocks (NewtonMatrix), solved by the overloads above.
+      throw std::logic_error("SpdSolver: the block CG takes a BlockSparseMatrix3f");
     } else if (options_.preconditioner == CorotationalOptions::Cholmod) {
       if (!analyzed_) {
         // METIS nested dissection (as for the harmonic weights); CHOLMOD's defaults without METIS.
@@ -207,8 +196,8 @@ class SpdSolver {
     }
   }
 
- private:
-  /// x += the block CG's solution of H dx = r0 (r0 = b - A x), to tolerance relative to |b|.
+  /// x += the block CG's solution of H dx = r0 (r0 = b - A x, e.g. summed in double by the caller),
+  /// to tolerance relative to |b|.
   void solveCorrection(const BlockSparseMatrix3f& H, const Eigen::VectorXd& b, const Eigen::VectorXd& r0,
                        Eigen::VectorXd& x, double tolerance, int& iterations, double& residual) {
     const double bn = b.norm(), rn = r0.norm();
@@ -232,6 +221,7 @@ class SpdSolver {
     residual = r.relativeResidual * rn / bn;
   }
 
+ private:
   Points freePositions(const Points& all) const {
     Points p(Eigen::Index(freeNodes_->size()), 3);
     for (std::size_t i = 0; i < freeNodes_->size(); ++i) p.row(Eigen::Index(i)) = all.row((*freeNodes_)[i]);
@@ -245,38 +235,7 @@ class SpdSolver {
     twoLevel_.update(H, freePositions(*current_));
   }
 
-  /// A's values as float 3x3 blocks. A holds one block row per free node: scalar column 3i + c
-  /// (= row, A being symmetric) lists the row's blocks in order, 3 scalars each. The block pattern is
-  /// built on the first call (A's pattern is fixed).
-  void toBlocks(const SpMat& A) {
-    const int n = int(A.rows() / 3);
-    const int* outer = A.outerIndexPtr();
-    const int* inner = A.innerIndexPtr();
-    const double* values = A.valuePtr();
-    if (blocks_.rows() != n) {
-      blocks_.rowStart.assign(std::size_t(n) + 1, 0);
-      for (int i = 0; i < n; ++i) blocks_.rowStart[std::size_t(i) + 1] = blocks_.rowStart[std::size_t(i)] + (outer[3 * i + 1] - outer[3 * i]) / 3;
-      blocks_.column.resize(std::size_t(blocks_.rowStart.back()));
-      blocks_.values.resize(9 * std::size_t(blocks_.rowStart.back()));
-      for (int i = 0; i < n; ++i)
-        for (int k = 0; k < blocks_.rowStart[std::size_t(i) + 1] - blocks_.rowStart[std::size_t(i)]; ++k)
-          blocks_.column[std::size_t(blocks_.rowStart[std::size_t(i)] + k)] = inner[outer[3 * i] + 3 * k] / 3;
-    }
-    parallelFor(std::size_t(n), [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        const int rowLen = blocks_.rowStart[i + 1] - blocks_.rowStart[i];
-        const double* v0 = values + outer[3 * i];
-        for (int k = 0; k < rowLen; ++k) {
-          float* dst = blocks_.values.data() + 9 * std::size_t(blocks_.rowStart[i] + k);
-          for (int c = 0; c < 3; ++c)
-            for (int d = 0; d < 3; ++d) dst[3 * c + d] = float(v0[3 * c * rowLen + 3 * k + d]);
-        }
-      }
-    }, 1024);
-  }
-
   const CorotationalOptions& options_;
-  BlockSparseMatrix3f blocks_;
   Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> cholmod_;
   bool analyzed_ = false;
   TwoLevelPreconditioner twoLevel_;
@@ -656,10 +615,12 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   };
   newton(options.maxNewtonIterations);
   // The energy is finite through det F = 0, so a few tets may settle inverted: move their free
-  // nodes out of the fold, then let Newton smooth the neighbourhood (it never re-inverts a tet);
-  // Newton's moves may open room for another round. A round that leaves as many tets inverted
+  // nodes out of the fold, then let Newton smooth the neighbourhood (it never re-inverts a tet; on
+  // the moved nodes' surroundings alone, see untangleRelaxRings, and on the whole mesh after the
+  // last round); Newton's moves may open room for another round. A round that leaves as many tets inverted
   // (the untangling could not free them) is undone at once: its Newton steps would only spend
   // time, and its pose is less relaxed than the one before it.
+  bool relaxedLocally = false;
   for (int round = 0; round < 3 && inverted > 0 && options.untangle; ++round) {
     const auto untangleStart = std::chrono::steady_clock::now();
     const Points before = posed;
@@ -675,6 +636,28 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       energy = evaluate(posed, inverted);
       break;
     }
+    if (options.untangleRelaxRings < 0) {
+      newton(std::max(1, options.maxNewtonIterations / 2));
+      continue;
+    }
+    std::vector<int> moved;
+    for (int v : freeNodes)
+      if (posed.row(v) != before.row(v)) moved.push_back(v);
+    const auto localStart = std::chrono::steady_clock::now();
+    CorotationalReport local;
+    try {
+      relaxNeighbourhood(rest, tets, fixedBone, posed, moved, options.untangleRelaxRings, options, &local);
+    } catch (const std::runtime_error&) {
+      // A part singular on its own (CHOLMOD refuses a projected Hessian with a zero eigenvalue, which
+      // the whole mesh's coupling may not have): posed is left as untangled, for the whole-mesh solve.
+    }
+    rep.untangleNewtonIterations += local.newtonIterations;
+    rep.untangleSeconds += seconds(localStart);
+    energy = evaluate(posed, inverted);
+    relaxedLocally = true;
+  }
+  if (relaxedLocally) {  // the whole mesh around the relaxed neighbourhoods
+    firstNorm = -1.0;
     newton(std::max(1, options.maxNewtonIterations / 2));
   }
   // Region volumes to regionVolumeTolerance (see CorotationalOptions::regionVolumeTolerance): the
@@ -973,82 +956,88 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   }
 
   // Block sparsity pattern: row i holds its free neighbours (and itself), sorted; an upper matrix
-  // (the fixed-corotated model's block CG, see NewtonMatrix) only those from i on.
+  // (the block CG's, see NewtonMatrix) only those from i on. Two passes over each row's tets, the
+  // first to count, the second to fill: a per-thread mark (last row that listed a column) leaves
+  // only the row's distinct columns to sort, and then maps each to its place in the row.
   NewtonMatrix A;
-  A.blocked = options.model == CorotationalOptions::FixedCorotated &&
-              (options.preconditioner == CorotationalOptions::BlockJacobi ||
-               options.preconditioner == CorotationalOptions::TwoLevel);
+  A.blocked = options.preconditioner == CorotationalOptions::BlockJacobi ||
+              options.preconditioner == CorotationalOptions::TwoLevel;
+  auto stored = [&](std::size_t i, int v) {  // the column of node v in row i, or -1
+    const int d = fixedBone[std::size_t(v)] < 0 ? dof[std::size_t(v)] : -1;
+    return A.blocked && d < int(i) ? -1 : d;
+  };
+  // Row i's distinct columns, in the order met, written to out (if given); returns their count.
+  auto distinctColumns = [&](std::size_t i, std::vector<int>& mark, int* out) {
+    int len = 0;
+    for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
+      const int t = incTet[std::size_t(k)] / 4;
+      for (int c = 0; c < 4; ++c) {
+        const int col = stored(i, tets(t, c));
+        if (col >= 0 && mark[std::size_t(col)] != int(i)) {
+          mark[std::size_t(col)] = int(i);
+          if (out) out[len] = col;
+          ++len;
+        }
+      }
+    }
+    return len;
+  };
+  // (Chunks of at least a 32nd of the rows: each allocates its own mark.)
+  const std::size_t patternGrain = std::max<std::size_t>(1024, nFree / 32);
   std::vector<int> rowStart(nFree + 1, 0);
-  std::vector<std::vector<int>> rowCols;
-  rowCols.resize(nFree);
   parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+    std::vector<int> mark(nFree, -1);
+    for (std::size_t i = b; i < e; ++i) rowStart[i + 1] = distinctColumns(i, mark, nullptr);
+  }, patternGrain);
+  for (std::size_t i = 0; i < nFree; ++i) {
+    if (rowStart[i + 1] >= kNotStored)  // over 65534 neighbours: not a tet mesh a skinning could come from
+      throw std::invalid_argument("relaxCorotational: a node has too many neighbours");
+    rowStart[i + 1] += rowStart[i];
+  }
+  // Where each (free node, incident tet, tet node) block goes in the node's row: its index there
+  // (kNotStored: not stored), found once here instead of by a search in every assembly.
+  std::vector<int> column(static_cast<std::size_t>(rowStart[nFree]));
+  std::vector<std::uint16_t> incColumn(4 * incTet.size(), kNotStored);
+  parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+    std::vector<int> mark(nFree, -1), place(nFree);
     for (std::size_t i = b; i < e; ++i) {
-      std::vector<int>& cols = rowCols[i];
+      int* cols = column.data() + rowStart[i];
+      const int len = distinctColumns(i, mark, cols);
+      std::sort(cols, cols + len);
+      for (int q = 0; q < len; ++q) place[std::size_t(cols[q])] = q;
       for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
         const int t = incTet[std::size_t(k)] / 4;
         for (int c = 0; c < 4; ++c) {
-          const int v = tets(t, c);
-          if (fixedBone[std::size_t(v)] < 0 && (!A.blocked || dof[std::size_t(v)] >= int(i)))
-            cols.push_back(dof[std::size_t(v)]);
+          const int col = stored(i, tets(t, c));
+          if (col >= 0) incColumn[4 * std::size_t(k) + std::size_t(c)] = std::uint16_t(place[std::size_t(col)]);
         }
       }
-      std::sort(cols.begin(), cols.end());
-      cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
     }
-  });
-  for (std::size_t i = 0; i < nFree; ++i) rowStart[i + 1] = rowStart[i] + int(rowCols[i].size());
+  }, patternGrain);
   const Eigen::Index n = Eigen::Index(3 * nFree);
   if (A.blocked) {
     A.blocks.upper = true;
     A.blocks.rowStart = rowStart;
-    A.blocks.column.resize(std::size_t(rowStart[nFree]));
+    A.blocks.column = std::move(column);
     A.blocks.values.assign(9 * std::size_t(rowStart[nFree]), 0.0f);
-    parallelFor(nFree, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i)
-        std::copy(rowCols[i].begin(), rowCols[i].end(), A.blocks.column.begin() + rowStart[i]);
-    });
   } else {
     // Symmetric, so the column-major arrays are filled row by row: column 3i+c holds row 3i+c.
     SpMat& S = A.scalar;
     S.resize(n, n);
     S.resizeNonZeros(Eigen::Index(9) * rowStart[nFree]);
     for (std::size_t i = 0; i < nFree; ++i)
-      for (int c = 0; c < 3; ++c) S.outerIndexPtr()[3 * i + c] = 9 * rowStart[i] + 3 * c * int(rowCols[i].size());
+      for (int c = 0; c < 3; ++c) S.outerIndexPtr()[3 * i + c] = 9 * rowStart[i] + 3 * c * (rowStart[i + 1] - rowStart[i]);
     S.outerIndexPtr()[n] = 9 * rowStart[nFree];
     parallelFor(nFree, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        const std::vector<int>& cols = rowCols[i];
+      for (std::size_t i = b; i < e; ++i)
         for (int c = 0; c < 3; ++c) {
           int* inner = S.innerIndexPtr() + S.outerIndexPtr()[3 * i + c];
-          for (std::size_t k = 0; k < cols.size(); ++k)
-            for (int d = 0; d < 3; ++d) inner[3 * k + std::size_t(d)] = 3 * cols[k] + d;
+          for (int k = rowStart[i]; k < rowStart[i + 1]; ++k)
+            for (int d = 0; d < 3; ++d) inner[3 * (k - rowStart[i]) + d] = 3 * column[std::size_t(k)] + d;
         }
-      }
     });
+    column = std::vector<int>();
   }
-  // Where each (free node, incident tet, tet node) block goes in the node's row: its index there
-  // (kNotStored: not stored), found once here instead of by a search in every assembly.
-  std::vector<std::uint16_t> incColumn(4 * incTet.size(), kNotStored);
-  std::atomic<bool> rowTooLong{false};
-  parallelFor(nFree, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const std::vector<int>& cols = rowCols[i];
-      if (cols.size() >= kNotStored) rowTooLong = true;
-      for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
-        const int t = incTet[std::size_t(k)] / 4;
-        for (int c = 0; c < 4; ++c) {
-          const int v = tets(t, c);
-          if (fixedBone[std::size_t(v)] >= 0 || (A.blocked && dof[std::size_t(v)] < int(i))) continue;
-          const auto pos = std::lower_bound(cols.begin(), cols.end(), dof[std::size_t(v)]) - cols.begin();
-          incColumn[4 * std::size_t(k) + std::size_t(c)] = std::uint16_t(pos);
-        }
-      }
-    }
-  });
-  if (rowTooLong)  // a node with over 65534 neighbours: not a tet mesh a skinning could come from
-    throw std::invalid_argument("relaxCorotational: a node has too many neighbours");
-  rowCols.clear();
-  rowCols.shrink_to_fit();
 
   const double nu = options.poisson, E = options.young;
   const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
@@ -1065,7 +1054,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     return;
   }
   std::vector<Mat3> rotation(static_cast<std::size_t>(nT));
-  Eigen::VectorXd rhs(n), x(n);
+  Eigen::VectorXd rhs(n), residual0(n), x(n);
   for (int outer = 0; outer < options.outerIterations; ++outer) {
     const auto assemblyStart = std::chrono::steady_clock::now();
     // Element rotations from the current pose.
@@ -1079,46 +1068,45 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
       }
     });
     // Row-wise assembly (no write conflicts): for free node i = local a of tet t, the blocks
-    // K'_ab = R K_ab R^T with K_ab = V (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a.g_b) I), and
-    // rhs_i = sum_t R sum_b K_ab x0_b  -  sum_{b fixed} K'_ab x_b.
-    double* values = A.scalar.valuePtr();
-    const int* outerIdx = A.scalar.outerIndexPtr();
+    // K'_ab = R K_ab R^T = V (lambda h_a h_b^T + mu h_b h_a^T + mu (g_a.g_b) I) with h = R g (K_ab =
+    // V (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a.g_b) I)), and the force of the rotated rest shape
+    // R sum_b K_ab X_b = V (3 lambda + 2 mu) h_a (sum_b X_b g_b^T = I), so that
+    // rhs_i = sum_t V (3 lambda + 2 mu) h_a  -  sum_{b fixed} K'_ab x_b. The residual of the start,
+    // rhs_i - sum_{b free} K'_ab x_b, is summed here in double from every block of the row (an upper
+    // matrix stores only some): the float block CG then solves for the correction alone.
     parallelFor(nFree, [&](std::size_t b, std::size_t e) {
+      std::vector<double> row;  // the row's stored blocks, summed in double
       for (std::size_t i = b; i < e; ++i) {
-        const int rowLen = (outerIdx[3 * i + 1] - outerIdx[3 * i]) / 3;  // blocks in the row
-        double* v0 = values + outerIdx[3 * i];
-        std::fill(v0, v0 + 9 * rowLen, 0.0);
-        Vec3 r = Vec3::Zero();
+        row.assign(9 * std::size_t(A.rowLength(i)), 0.0);
+        Vec3 r = Vec3::Zero(), free = Vec3::Zero();
         for (int k = incStart[i]; k < incStart[i + 1]; ++k) {
           const int t = incTet[std::size_t(k)] / 4, a = incTet[std::size_t(k)] % 4;
           const RestTet& rt = restTets[std::size_t(t)];
-          const Mat3& R = rotation[std::size_t(t)];
-          Eigen::Matrix<double, 4, 3> g;
-          g.bottomRows<3>() = rt.DmInv;
-          g.row(0) = -rt.DmInv.colwise().sum();
-          const Vec3 ga = g.row(a).transpose();
-          const Vec3 xr0 = node(rest, tets(t, 0));
-          Vec3 restForce = Vec3::Zero();
+          const Eigen::Matrix<double, 4, 3> g = gradients(rt);
+          const Eigen::Matrix<double, 4, 3> h = g * rotation[std::size_t(t)].transpose();
+          const Vec3 ga = g.row(a).transpose(), ha = h.row(a).transpose();
+          r += rt.volume * (3.0 * lambda + 2.0 * mu) * ha;
           for (int bb = 0; bb < 4; ++bb) {
-            const Vec3 gb = g.row(bb).transpose();
-            const Mat3 Kab = rt.volume * (lambda * ga * gb.transpose() + mu * gb * ga.transpose() +
-                                          mu * ga.dot(gb) * Mat3::Identity());
-            restForce += Kab * (node(rest, tets(t, bb)) - xr0);  // K annihilates translations
-            const Mat3 block = R * Kab * R.transpose();
+            const Vec3 hb = h.row(bb).transpose();
+            Mat3 block = lambda * ha * hb.transpose() + mu * hb * ha.transpose();
+            block.diagonal().array() += mu * ga.dot(g.row(bb).transpose());
+            block *= rt.volume;
             const int v = tets(t, bb);
             if (fixedBone[std::size_t(v)] >= 0) {
               r -= block * node(posed, v);
-            } else {
-              const std::size_t off = 3 * std::size_t(incColumn[4 * std::size_t(k) + std::size_t(bb)]);
-              for (int c = 0; c < 3; ++c) {
-                double* vc = v0 + 3 * c * rowLen + off;
-                for (int d = 0; d < 3; ++d) vc[d] += block(c, d);
-              }
+              continue;
             }
+            free += block * node(posed, v);
+            const std::uint16_t slot = incColumn[4 * std::size_t(k) + std::size_t(bb)];
+            if (slot == kNotStored) continue;  // below the diagonal of an upper matrix
+            double* dst = row.data() + 9 * std::size_t(slot);
+            for (int c = 0; c < 3; ++c)
+              for (int d = 0; d < 3; ++d) dst[3 * c + d] += block(c, d);
           }
-          r += R * restForce;
         }
+        A.setRow(i, row.data());
         rhs.segment<3>(Eigen::Index(3 * i)) = r;
+        residual0.segment<3>(Eigen::Index(3 * i)) = r - free;
         x.segment<3>(Eigen::Index(3 * i)) = node(posed, freeNodes[i]);
       }
     }, 256);
@@ -1127,7 +1115,10 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
     const auto solveStart = std::chrono::steady_clock::now();
     int iterations = 0;
     double residual = 0.0;
-    solver.solve(A.scalar, rhs, x, options.tolerance, iterations, residual);
+    if (A.blocked)
+      solver.solveCorrection(A.blocks, rhs, residual0, x, options.tolerance, iterations, residual);
+    else
+      solver.solve(A.scalar, rhs, x, options.tolerance, iterations, residual);
     rep.solveSeconds += seconds(solveStart);
     for (std::size_t i = 0; i < nFree; ++i)
       posed.row(freeNodes[i]) = x.segment<3>(Eigen::Index(3 * i)).transpose();
@@ -1142,6 +1133,76 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   }
   countInvertedAfter(posed, tets, fixedBone, rep);
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,
+                        const std::vector<int>& centre, int rings, const CorotationalOptions& options,
+                        CorotationalReport* report) {
+  const Eigen::Index nV = rest.rows(), nT = tets.rows();
+  if (posed.rows() != nV || Eigen::Index(fixedBone.size()) != nV)
+    throw std::invalid_argument("relaxNeighbourhood: rest, posed and fixedBone differ in size");
+  auto isFree = [&](int v) { return fixedBone[std::size_t(v)] < 0; };
+  // Grown ring by ring over the tets (a few passes over the tet list: no adjacency to build).
+  std::vector<char> active(std::size_t(nV), 0);
+  for (int v : centre) {
+    if (v < 0 || v >= nV) throw std::invalid_argument("relaxNeighbourhood: centre node " + std::to_string(v) + " out of range");
+    active[std::size_t(v)] = isFree(v);
+  }
+  auto touches = [&](Eigen::Index t, const std::vector<char>& set) {
+    for (int c = 0; c < 4; ++c)
+      if (set[std::size_t(tets(t, c))]) return true;
+    return false;
+  };
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<char> next = active;
+    for (Eigen::Index t = 0; t < nT; ++t)
+      if (touches(t, active))
+        for (int c = 0; c < 4; ++c)
+          if (isFree(tets(t, c))) next[std::size_t(tets(t, c))] = 1;
+    active.swap(next);
+  }
+  // The part: the tets touching an unknown, their nodes renumbered.
+  std::vector<int> local(std::size_t(nV), -1), global;
+  std::vector<Eigen::Index> partTets;
+  for (Eigen::Index t = 0; t < nT; ++t)
+    if (touches(t, active)) {
+      partTets.push_back(t);
+      for (int c = 0; c < 4; ++c) {
+        const int v = tets(t, c);
+        if (local[std::size_t(v)] < 0) {
+          local[std::size_t(v)] = int(global.size());
+          global.push_back(v);
+        }
+      }
+    }
+  // (No held node: a part of the mesh that no bone holds, singular on its own.)
+  if (partTets.empty() || std::none_of(global.begin(), global.end(), [&](int v) { return !active[std::size_t(v)]; })) {
+    if (report) *report = CorotationalReport{};
+    return;
+  }
+  const Eigen::Index m = Eigen::Index(global.size());
+  Points partRest(m, 3), partPosed(m, 3);
+  std::vector<int> partFixed(static_cast<std::size_t>(m));
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const int v = global[std::size_t(k)];
+    partRest.row(k) = rest.row(v);
+    partPosed.row(k) = posed.row(v);
+    // Held nodes keep their bone (or 0 for a held free node: the id only matters to the continuation).
+    partFixed[std::size_t(k)] = active[std::size_t(v)] ? -1 : std::max(0, fixedBone[std::size_t(v)]);
+  }
+  Tets partTetNodes(Eigen::Index(partTets.size()), 4);
+  for (std::size_t q = 0; q < partTets.size(); ++q)
+    for (int c = 0; c < 4; ++c) partTetNodes(Eigen::Index(q), c) = local[std::size_t(tets(partTets[q], c))];
+  CorotationalOptions o = options;
+  o.volumeRegions.clear();
+  o.pathVolumeRegions.clear();
+  o.boneParents.clear();
+  o.startCorrection.resize(0, 3);
+  o.continuation = CorotationalOptions::Never;
+  o.untangle = false;
+  relaxCorotational(partRest, partTetNodes, partFixed, partPosed, o, report);
+  for (Eigen::Index k = 0; k < m; ++k)
+    if (partFixed[std::size_t(k)] < 0) posed.row(global[std::size_t(k)]) = partPosed.row(k);
 }
 
 }  // namespace repose
