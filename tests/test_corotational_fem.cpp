@@ -122,7 +122,9 @@ TEST(CorotationalFem, BarStretchedByItsEndsHasUniformStrain) {
       fixed[b.id(b.nx - 1, j, k)] = 1;
       posed(b.id(b.nx - 1, j, k), 0) += strain * L;
     }
-  for (auto pre : {CorotationalOptions::Jacobi, CorotationalOptions::IncompleteCholesky, CorotationalOptions::Cholmod}) {
+  // (BlockJacobi and TwoLevel: the float upper blocks, solving for the correction to the start.)
+  for (auto pre : {CorotationalOptions::Jacobi, CorotationalOptions::IncompleteCholesky, CorotationalOptions::Cholmod,
+                   CorotationalOptions::BlockJacobi, CorotationalOptions::TwoLevel}) {
     CorotationalOptions opt;
     opt.poisson = 0.0;  // no lateral contraction: u = (strain x, 0, 0) is the exact solution
     opt.tolerance = 1e-13;
