@@ -596,8 +596,10 @@ std::string Pipeline::relaxationSummary() const {
     << (relax_->GetInvertedRigidAfter() > 0
           ? " (" + std::to_string(relax_->GetInvertedRigidAfter()) + " with only bone nodes)"
           : std::string())
-    << (relax_->GetUntangledNodes() > 0 ? ", " + std::to_string(relax_->GetUntangledNodes()) + " nodes untangled"
-                                        : std::string())
+    << (relax_->GetUntangledNodes() > 0
+          ? ", " + std::to_string(relax_->GetUntangledNodes()) + " nodes untangled (their neighbourhoods " +
+              std::to_string(relax_->GetUntangleNewtonIterations()) + " Newton iterations)"
+          : std::string())
     << (relax_->GetContinuationSteps() > 0
           ? std::string(", fold-free continuation ") + std::to_string(relax_->GetContinuationSteps()) + " steps " +
               (relax_->GetContinuationUsed() ? "(kept)" : "(not kept)")
