@@ -716,6 +716,9 @@ TEST(FixedCorotatedFem, NeighbourhoodSolveIsTheWholeSolveWithTheRestHeld) {
   EXPECT_EQ(z, s.stamped);
   EXPECT_THROW(repose::relaxNeighbourhood(b.nodes, b.tets, s.fixed, z, {int(b.nodes.rows())}, 1, opt),
                std::invalid_argument);
+  Tets badTets = b.tets;
+  badTets(3, 2) = int(b.nodes.rows());
+  EXPECT_THROW(repose::relaxNeighbourhood(b.nodes, badTets, s.fixed, z, {centre}, 1, opt), std::invalid_argument);
   EXPECT_EQ(z, s.stamped);
 }
 

@@ -1141,6 +1141,8 @@ void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<
   const Eigen::Index nV = rest.rows(), nT = tets.rows();
   if (posed.rows() != nV || Eigen::Index(fixedBone.size()) != nV)
     throw std::invalid_argument("relaxNeighbourhood: rest, posed and fixedBone differ in size");
+  if (nT > 0 && (tets.minCoeff() < 0 || tets.maxCoeff() >= nV))
+    throw std::invalid_argument("relaxNeighbourhood: a tet has a node index outside [0, " + std::to_string(nV) + ")");
   auto isFree = [&](int v) { return fixedBone[std::size_t(v)] < 0; };
   // Grown ring by ring over the tets (a few passes over the tet list: no adjacency to build).
   std::vector<char> active(std::size_t(nV), 0);

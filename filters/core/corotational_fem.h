@@ -198,7 +198,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
 /// untangling), so the result is the minimum of the whole mesh's energy over those unknowns. Nodes
 /// outside the neighbourhood are not touched. Fixed nodes and nodes of no tet in centre are ignored;
 /// an empty neighbourhood, or one that holds no node, is a no-op. report, if given, is the part's.
-/// Throws std::invalid_argument on size mismatches or centre nodes out of range.
+/// Throws std::invalid_argument on size mismatches, or tet or centre nodes out of range.
 void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,
                         const std::vector<int>& centre, int rings, const CorotationalOptions& options,
                         CorotationalReport* report = nullptr);
