@@ -1300,6 +1300,52 @@ TEST(TwoLevelPreconditioner, LowRankTermJoinsTheFineLevelExactly) {
   EXPECT_LT((x - dense.ldlt().solve(b)).norm(), 1e-7 * x.norm());
 }
 
+// A projected Newton Hessian is only semi-definite. With every block touching a slab of nodes
+// zeroed, the slab's aggregates have rigid modes of zero energy and the coarse matrix is singular:
+// it is factorized with a small shift, the preconditioner stays positive definite, and CG still
+// solves a system with a right-hand side in the matrix's range.
+TEST(TwoLevelPreconditioner, SingularCoarseMatrixIsShiftedNotRefused) {
+  const Box b = makeBox(12, 4, 4, 1.0);
+  Points positions;
+  repose::BlockSparseMatrix3f A = clampedBoxStiffness(b, 5.0, 1.0, positions);
+  const int n = A.rows();
+  std::vector<char> slab(std::size_t(n), 0);
+  for (int i = 0; i < n; ++i) slab[std::size_t(i)] = positions(i, 0) > 8.5;
+  int zeroed = 0;
+  for (int i = 0; i < n; ++i)
+    for (int k = A.rowStart[std::size_t(i)]; k < A.rowStart[std::size_t(i) + 1]; ++k)
+      if (slab[std::size_t(i)] || slab[std::size_t(A.column[std::size_t(k)])]) {
+        std::fill_n(A.values.begin() + 9 * std::ptrdiff_t(k), 9, 0.0f);
+        ++zeroed;
+      }
+  ASSERT_GT(zeroed, 0);
+  repose::TwoLevelPreconditioner M;
+  M.aggregate(A, positions, 20);
+  ASSERT_NO_THROW(M.update(A, positions));
+  EXPECT_GT(M.coarseShift(), 0.0);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  Eigen::VectorXd r(3 * n), z;
+  for (int trial = 0; trial < 5; ++trial) {
+    for (int i = 0; i < 3 * n; ++i) r(i) = g(rng);
+    M.apply(r, z);
+    EXPECT_GT(r.dot(z), 0.0);
+  }
+  // A right-hand side in A's range (zero on the slab): CG reaches it.
+  Eigen::VectorXd truth(3 * n), rhs;
+  for (int i = 0; i < 3 * n; ++i) truth(i) = slab[std::size_t(i / 3)] ? 0.0 : g(rng);
+  A.multiply(truth, rhs);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n), Ax;
+  const repose::BlockCgResult result = repose::preconditionedBlockCg(A, rhs, x, 1e-8, 2000, M);
+  EXPECT_LE(result.relativeResidual, 1e-8);
+  A.multiply(x, Ax);
+  EXPECT_LT((Ax - rhs).norm(), 1e-6 * rhs.norm());
+  // The unchanged matrix needs no shift (it is reset on every update).
+  const repose::BlockSparseMatrix3f K = clampedBoxStiffness(b, 5.0, 1.0, positions);
+  M.update(K, positions);
+  EXPECT_EQ(M.coarseShift(), 0.0);
+}
+
 TEST(TwoLevelPreconditioner, NeedsFewerIterationsThanBlockJacobi) {
   const Box b = makeBox(40, 8, 8, 1.0);
   Points positions;

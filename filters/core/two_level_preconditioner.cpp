@@ -65,6 +65,7 @@ struct TwoLevelPreconditioner::Impl {
   Eigen::SparseMatrix<double> Ac;
   Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> llt;  // supernodal if that pays
   bool analyzed = false;
+  double lastShift = 0.0;           // the diagonal shift of Ac's last factorization (see update())
 
   // In float, as the CG matrix: the passes of apply() are bound by memory traffic. Ac is formed
   // from the rounded offsets, so P^T and P stay each other's transposes (M stays symmetric).
@@ -485,13 +486,31 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
   }
   if (!s.analyzed) {
     s.llt.setMode(Eigen::CholmodAuto);
+    s.llt.cholmod().print = 0;  // silent: a failed unshifted try (see below) is no message for the user
     s.llt.analyzePattern(s.Ac);
     s.analyzed = true;
   }
+  // A projected Newton Hessian is only semi-definite: where every tet of an aggregate had its
+  // negative eigenvalues clamped, one of its rigid modes can cost nothing, and Ac is singular.
+  // Ac + shift I still makes an SPD preconditioner, which keeps CG exact and only slows that mode, so
+  // the factorization is retried with a growing shift (relative to Ac's mean diagonal) instead of the
+  // solve failing.
+  s.llt.setShift(0.0);
+  s.lastShift = 0.0;
   s.llt.factorize(s.Ac);
+  if (s.llt.info() != Eigen::Success) {
+    const double scale = s.Ac.rows() > 0 ? s.Ac.diagonal().cwiseAbs().mean() : 0.0;
+    for (double relative = 1e-10; relative <= 1e-2 && s.llt.info() != Eigen::Success && scale > 0; relative *= 100) {
+      s.lastShift = relative * scale;
+      s.llt.setShift(s.lastShift);
+      s.llt.factorize(s.Ac);
+    }
+  }
   if (s.llt.info() != Eigen::Success)
-    throw std::runtime_error("TwoLevelPreconditioner: the coarse matrix is not positive definite");
+    throw std::runtime_error("TwoLevelPreconditioner: the coarse matrix is not positive definite, even shifted");
 }
+
+double TwoLevelPreconditioner::coarseShift() const { return impl_->lastShift; }
 
 double TwoLevelPreconditioner::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { return impl_->apply(r, z); }
 

@@ -37,8 +37,11 @@ class TwoLevelPreconditioner : public BlockPreconditioner {
   /// Prepares for A (same pattern as given to aggregate): block-Jacobi inverses, the rigid modes
   /// about the aggregates' centroids at positions (the current pose: modes of the rotated aggregate),
   /// Ac = P^T A P and its Cholesky factorization (the symbolic analysis is kept for later calls).
-  /// Throws std::runtime_error if the factorization fails.
+  /// A singular Ac (A only semi-definite) is factorized with a small diagonal shift instead.
+  /// Throws std::runtime_error if even a shift of 1e-2 of Ac's mean diagonal does not factorize.
   void update(const BlockSparseMatrix3f& A, const Points& positions);
+  /// The diagonal shift of the last update's coarse factorization (0: none was needed).
+  double coarseShift() const;
   /// Prepares for A without the coarse level: M^-1 = D^-1 alone (block Jacobi).
   void updateFine(const BlockSparseMatrix3f& A);
 
