@@ -126,13 +126,15 @@ int vtkReposeCorotationalRelax::RequestData(
         options.boneParents.push_back(joint.parent);
       }
     }
-    // Segments need the rest mesh's weights; without them the whole body is one region.
-    if (this->VolumeRegions >= 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
+    // Segments need the rest mesh's weights; without them the whole body is one region. The linear
+    // model has no region terms: nothing is built for it.
+    const int volumeRegions = this->Model == 1 ? this->VolumeRegions : 0;
+    if (volumeRegions >= 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
     {
       options.volumeRegions = repose::bodySegments(
         repose_vtk::ToSparseWeights(rest->GetPointData(), rest->GetNumberOfPoints()), tets);
       vtkDataArray* labels = rest->GetCellData()->GetArray("Label");
-      if (this->VolumeRegions == 3 && labels && labels->GetNumberOfTuples() == nt)
+      if (volumeRegions == 3 && labels && labels->GetNumberOfTuples() == nt)
       {
         std::vector<int> tetLabels(static_cast<std::size_t>(nt));
         for (vtkIdType c = 0; c < nt; ++c)
@@ -144,7 +146,7 @@ int vtkReposeCorotationalRelax::RequestData(
         options.volumeRegions = repose::tissueSegments(options.volumeRegions, tetLabels);
       }
     }
-    else if (this->VolumeRegions > 0)
+    else if (volumeRegions > 0)
     {
       options.volumeRegions.assign(static_cast<std::size_t>(nt), 0);
     }
