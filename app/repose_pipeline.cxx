@@ -535,6 +535,7 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
       filter->SetSkeletonJSON(skeletonJson_.c_str());
     }
     relax_ = filter;
+    relax_->ResetCancel();  // a cancel meant for an earlier run that had already ended
     relax_->SetWarmStart(relaxWarmStart_);
     relax_->SetPoissonRatio(poisson);
     relax_->SetOuterIterations(outerIterations);
@@ -585,6 +586,10 @@ void Pipeline::setRelaxationWarmStart(bool enabled) {
 
 vtkReposeCorotationalRelax* Pipeline::relaxation() const { return relax_; }
 
+void Pipeline::cancelRelaxation() {
+  if (relax_) relax_->Cancel();
+}
+
 std::string Pipeline::relaxationSummary() const {
   if (!relax_) return "";
   std::ostringstream m;
@@ -613,7 +618,12 @@ std::string Pipeline::relaxationSummary() const {
 vtkUnstructuredGrid* Pipeline::posedMesh() {
   runStage(skinning_, "skinning");
   if (relax_) {
-    runStage(relax_, "FEM relaxation");
+    try {
+      runStage(relax_, "FEM relaxation");
+    } catch (const std::runtime_error&) {
+      if (relax_->GetCancelled()) throw Cancelled("relaxation cancelled");
+      throw;
+    }
     return relax_->GetOutput();
   }
   return skinning_->GetOutput();

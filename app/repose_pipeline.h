@@ -58,7 +58,7 @@ void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImage
 
 /// Thrown by Pipeline::prepare when the cancel check returns true (between stages).
 struct Cancelled : std::runtime_error {
-  Cancelled() : std::runtime_error("preprocessing cancelled") {}
+  explicit Cancelled(const char* what = "preprocessing cancelled") : std::runtime_error(what) {}
 };
 
 class Pipeline {
@@ -109,6 +109,9 @@ public:
   void setRelaxationWarmStart(bool enabled);
   /// One line on the last relaxation: CG iterations, residual, inverted tets before and after.
   std::string relaxationSummary() const;
+  /// Stops a running relaxation (from any thread) at its next check, a few seconds at most: the
+  /// call that runs it (posedMesh() and what follows it) throws Cancelled. No-op without relaxation.
+  void cancelRelaxation();
   /// The relaxation filter (its figures of the last run), or null when relaxation is off.
   vtkReposeCorotationalRelax* relaxation() const;
   /// Optional intensity image on the rest label grid, posed with trilinear sampling.

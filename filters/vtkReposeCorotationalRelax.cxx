@@ -56,6 +56,7 @@ int vtkReposeCorotationalRelax::FillInputPortInformation(int port, vtkInformatio
 int vtkReposeCorotationalRelax::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  this->Cancelled = false;
   vtkUnstructuredGrid* posed = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* rest = vtkUnstructuredGrid::GetData(inputVector[1]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
@@ -157,10 +158,12 @@ int vtkReposeCorotationalRelax::RequestData(
       options.startCorrection =
         Eigen::Map<const repose::Points>(this->LastCorrection.data(), nodes.rows(), 3);
     }
+    options.cancelled = [this]() { return this->CancelRequested.load(); };
     const repose::Points input = nodes;
     repose::CorotationalReport report;
     this->LastCorrection.clear();  // a failed run leaves nothing to start from
     repose::relaxCorotational(restNodes, tets, fixedBone, nodes, options, &report);
+    this->CancelRequested = false;
     this->LastCorrection.resize(3 * static_cast<std::size_t>(nodes.rows()));
     Eigen::Map<repose::Points>(this->LastCorrection.data(), nodes.rows(), 3) = nodes - input;
     this->LastRestMTime = restTime;
@@ -196,12 +199,29 @@ int vtkReposeCorotationalRelax::RequestData(
     this->ContinuationUsed = report.continuationUsed;
     this->LastContinuationTime = report.continuationSeconds;
   }
+  catch (const repose::RelaxationCancelled&)
+  {
+    this->CancelRequested = false;
+    this->Cancelled = true;
+    return 0;
+  }
   catch (const std::exception& e)
   {
+    this->CancelRequested = false;
     vtkErrorMacro(<< e.what());
     return 0;
   }
   return 1;
+}
+
+void vtkReposeCorotationalRelax::Cancel()
+{
+  this->CancelRequested = true;
+}
+
+void vtkReposeCorotationalRelax::ResetCancel()
+{
+  this->CancelRequested = false;
 }
 
 void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)

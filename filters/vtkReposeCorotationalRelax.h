@@ -9,6 +9,7 @@
 #include "ReposeFiltersModule.h"
 #include "vtkUnstructuredGridAlgorithm.h"
 
+#include <atomic>
 #include <vector>
 
 class REPOSEFILTERS_EXPORT vtkReposeCorotationalRelax : public vtkUnstructuredGridAlgorithm
@@ -121,6 +122,19 @@ public:
   vtkGetMacro(LastUntangleTime, double);
   vtkGetMacro(LastContinuationTime, double);  ///< includes its assembly and solves
 
+  /// Stops the running execution (or, if none runs, the next one) at its next check: between Newton
+  /// steps, continuation steps and untangling rounds, a few seconds apart at most on a 2.7 M-tet
+  /// mesh. That execution fails (the executive says so; the filter adds no error of its own), leaves
+  /// no output and reports GetCancelled(); the next one runs normally. Safe to call from another
+  /// thread (a GUI's Cancel button; not a Python thread: VTK 9.1's wrapping keeps Python's global lock
+  /// during Update()).
+  void Cancel();
+  /// Forgets a Cancel() that no execution has taken yet (one that came just after the solve's last
+  /// check), so that it does not stop the next execution.
+  void ResetCancel();
+  /// Whether the last execution was stopped by Cancel().
+  vtkGetMacro(Cancelled, bool);
+
 protected:
   vtkReposeCorotationalRelax();
   ~vtkReposeCorotationalRelax() override;
@@ -150,6 +164,8 @@ protected:
   vtkMTimeType LastRestMTime = 0;   // ... for this rest mesh
   int ContinuationSteps = 0;
   bool ContinuationUsed = false;
+  std::atomic<bool> CancelRequested{ false };
+  bool Cancelled = false;
   double LastContinuationTime = 0.0;
   int CGIterations = 0;
   int NewtonIterations = 0;

@@ -675,6 +675,45 @@ TEST(FixedCorotatedFem, FoldFreeContinuationLeavesNoFoldAndFindsTheMinimum) {
   EXPECT_FALSE(blocked.continuationUsed);
 }
 
+// A cancel check answered true stops the solve wherever it is asked (Newton, untangling rounds, the
+// fold-free continuation), with RelaxationCancelled and posed as it came in; never answered true, it
+// changes nothing.
+TEST(FixedCorotatedFem, CancelStopsTheSolveAndLeavesPosedAsItCameIn) {
+  const FoldedBar f = foldedBar();
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
+  opt.boneParents = {-1, 0};
+  opt.continuation = CorotationalOptions::IfInverted;
+  Points plain = f.folded;
+  CorotationalReport plainReport;
+  repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, plain, opt, &plainReport);
+  ASSERT_GT(plainReport.continuationSteps, 0);  // every kind of check point is on the way
+  int calls = 0;
+  opt.cancelled = [&calls]() {
+    ++calls;
+    return false;
+  };
+  Points counted = f.folded;
+  repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, counted, opt, nullptr);
+  EXPECT_EQ((counted - plain).cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_GT(calls, plainReport.newtonIterations + plainReport.continuationSteps);
+  const int total = calls;
+  for (int stopAt : {1, 2, total / 3, total / 2, total - 1, total}) {
+    calls = 0;
+    opt.cancelled = [&calls, stopAt]() { return ++calls >= stopAt; };
+    Points x = f.folded;
+    EXPECT_THROW(repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, x, opt, nullptr), repose::RelaxationCancelled)
+        << "cancelled at check " << stopAt << " of " << total;
+    EXPECT_EQ(calls, stopAt);
+    EXPECT_EQ((x - f.folded).cwiseAbs().maxCoeff(), 0.0) << "cancelled at check " << stopAt;
+  }
+  // The linear model asks too.
+  CorotationalOptions linear;
+  linear.cancelled = []() { return true; };
+  Points y = f.blended;
+  EXPECT_THROW(repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, y, linear, nullptr), repose::RelaxationCancelled);
+  EXPECT_EQ((y - f.blended).cwiseAbs().maxCoeff(), 0.0);
+}
+
 // relaxNeighbourhood is the whole mesh's minimum over the neighbourhood's nodes: the same as a
 // whole-mesh solve with every other free node held, nodes outside it untouched; with rings enough
 // to reach every free node, the whole-mesh solve itself.

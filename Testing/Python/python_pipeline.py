@@ -6,8 +6,8 @@ import sys
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
-from repose import (vtkReposeBodyMesher, vtkReposeBoneWeights, vtkReposePhantomSource, vtkReposePosedVolume,
-                    vtkReposeSkinning, vtkReposeSurfaceBinding, vtkReposeSurfaceDeformer,
+from repose import (vtkReposeBodyMesher, vtkReposeBoneWeights, vtkReposeCorotationalRelax, vtkReposePhantomSource,
+                    vtkReposePosedVolume, vtkReposeSkinning, vtkReposeSurfaceBinding, vtkReposeSurfaceDeformer,
                     vtkReposeSurfaceExtractor)
 
 from repose_testing import check
@@ -80,5 +80,21 @@ tibia = 26  # TibiaLeft, moved by the knee flexion
 a, b = tet_only == tibia, posed == tibia
 d = 2 * (a & b).sum() / (a.sum() + b.sum())
 check(d >= 0.95, f"tibia from the tet field alone vs with rigid bones: Dice {d:.3f}", failures)
-print(f"{7 - len(failures)} passed, {len(failures)} failed")
+
+# The FEM relaxation can be stopped: Cancel() (from any thread: a GUI's button) stops the running or
+# next execution, which leaves no output; the next execution runs normally.
+relax = vtkReposeCorotationalRelax()
+relax.SetInputConnection(0, skinning.GetOutputPort())
+relax.SetInputConnection(1, weights.GetOutputPort())
+relax.SetSkeletonJSON(skeleton)
+relax.Cancel()
+relax.Update()
+check(relax.GetCancelled() and relax.GetOutput().GetNumberOfPoints() == 0,
+      "Cancel() stops the relaxation and leaves no output", failures)
+relax.Modified()
+relax.Update()
+relaxed = relax.GetOutput().GetNumberOfPoints()
+check(not relax.GetCancelled() and relaxed == mesh.GetNumberOfPoints() and relax.GetNewtonIterations() > 0,
+      f"the next execution runs normally ({relax.GetNewtonIterations()} Newton iterations)", failures)
+print(f"{9 - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)

@@ -42,10 +42,13 @@
 #include "scene_view.h"
 #include "slice_views.h"
 #include "start_page.h"
+#include "vtkReposeCorotationalRelax.h"
 #include "vtkReposePosedVolume.h"
 
 namespace repose {
 namespace {
+
+const char* const kRelaxText = "Relax soft tissue (FEM)";
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -106,7 +109,7 @@ MainWindow::~MainWindow() {
     w->wait();
   }
   sliceWatcher_.waitForFinished();
-  relaxWatcher_.waitForFinished();
+  stopRelaxation();
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
@@ -155,8 +158,9 @@ void MainWindow::buildWorkspace() {
   skinning_->addItem("Linear blend (LBS)", "lbs");
   skinning_->setToolTip("DQS keeps volume at bent joints; LBS is the classic blend (collapses at large angles)");
   form->addRow("Skinning:", skinning_);
-  relax_ = new QPushButton("Relax soft tissue (FEM)", deformation);
-  relax_->setToolTip("Corotational FEM relaxation of the current pose, bones rigid (Ctrl+F). Runs in the background.");
+  relax_ = new QPushButton(kRelaxText, deformation);
+  relax_->setToolTip("Corotational FEM relaxation of the current pose, bones rigid (Ctrl+F). Runs in the background; "
+                     "click again to cancel it.");
   form->addRow(relax_);
   showBefore_ = new QCheckBox("Show before relaxation (wireframe)", deformation);
   showBefore_->setChecked(true);
@@ -196,7 +200,12 @@ void MainWindow::buildWorkspace() {
   connect(overlay, &QSlider::valueChanged, this, [this](int v) { slices_->setOverlayOpacity(v / 100.0); });
   connect(skinning_, qOverload<int>(&QComboBox::currentIndexChanged), this,
           [this] { setSkinning(skinning_->currentData().toString()); });
-  connect(relax_, &QPushButton::clicked, this, &MainWindow::relaxCurrentPose);
+  connect(relax_, &QPushButton::clicked, this, [this] {
+    if (isRelaxing())
+      cancelRelaxation();
+    else
+      relaxCurrentPose();
+  });
   connect(showBefore_, &QCheckBox::toggled, this, [this](bool on) {
     scene_->setGhost(on && relaxed_ ? beforeSurfaces_.Get() : nullptr);
     scene_->render();
@@ -434,7 +443,7 @@ void MainWindow::workerFinished() {
 
 void MainWindow::installCase(const OpenResult& result) {
   sliceWatcher_.waitForFinished();
-  relaxWatcher_.waitForFinished();
+  stopRelaxation();
   ++caseGeneration_;
   pipeline_ = result.pipeline;
   table_ = result.table;
@@ -469,7 +478,7 @@ void MainWindow::installCase(const OpenResult& result) {
 
 void MainWindow::closeCase() {
   sliceWatcher_.waitForFinished();
-  relaxWatcher_.waitForFinished();
+  stopRelaxation();
   ++caseGeneration_;
   pipeline_.reset();
   restImage_ = nullptr;
@@ -650,7 +659,8 @@ void MainWindow::relaxCurrentPose() {
     relaxing_ = true;
     posedWhileRelaxing_ = false;
     relaxGeneration_ = caseGeneration_;
-    for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, relax_, skinning_}) w->setEnabled(false);
+    for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, skinning_}) w->setEnabled(false);
+    relax_->setText("Cancel relaxation");
     std::shared_ptr<Pipeline> p = pipeline_;
     relaxWatcher_.setFuture(QtConcurrent::run([p]() -> QString {
       try {
@@ -667,9 +677,18 @@ void MainWindow::relaxCurrentPose() {
 void MainWindow::relaxDone() {
   relaxing_ = false;
   for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, relax_, skinning_}) w->setEnabled(true);
+  relax_->setText(kRelaxText);
   const QString error = relaxWatcher_.result();
   updateActions();
   if (!pipeline_ || relaxGeneration_ != caseGeneration_) return;  // the case was closed meanwhile
+  if (pipeline_->relaxation() && pipeline_->relaxation()->GetCancelled()) {
+    guarded([&] { pipeline_->setRelaxation(false); });
+    relaxSummary_.clear();
+    relaxLabel_->setText("Relaxation cancelled: skinning only.");
+    emit relaxFinished();
+    if (posedWhileRelaxing_) poseChanged();
+    return;
+  }
   if (!error.isEmpty()) {
     guarded([&] { pipeline_->setRelaxation(false); });
     relaxLabel_->setText("Skinning only.");
@@ -688,6 +707,18 @@ void MainWindow::relaxDone() {
   emit relaxFinished();
   // A pose set while the solver ran (a loaded pose) wins over the relaxed result.
   if (posedWhileRelaxing_) poseChanged();
+}
+
+void MainWindow::cancelRelaxation() {
+  if (!isRelaxing() || !pipeline_) return;
+  pipeline_->cancelRelaxation();
+  relaxLabel_->setText("Cancelling the relaxation…");
+  relax_->setEnabled(false);  // until relaxDone()
+}
+
+void MainWindow::stopRelaxation() {
+  if (isRelaxing() && pipeline_) pipeline_->cancelRelaxation();
+  relaxWatcher_.waitForFinished();
 }
 
 void MainWindow::dropRelaxation() {

@@ -70,6 +70,9 @@ public:
   bool setSkinning(const QString& method);
   /// FEM relaxation of the current pose in the background; relaxFinished() follows.
   void relaxCurrentPose();
+  /// Stops a running relaxation at the solver's next check (a few seconds at most); relaxFinished()
+  /// follows, with the pose left skinned only. The relax button does this while the solver runs.
+  void cancelRelaxation();
   bool isRelaxing() const { return relaxing_; }
   QString relaxationSummary() const { return relaxSummary_; }
 
@@ -108,6 +111,7 @@ private:
   void sliceUpdateFinished();
   void relaxDone();
   void dropRelaxation();
+  void stopRelaxation();  // cancels a running relaxation and waits for it
   void showAnimationFrame(int frame);
   void updateActions();
   void showError(const QString& message);

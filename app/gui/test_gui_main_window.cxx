@@ -320,6 +320,30 @@ private slots:
     c->setAngles(c->skeleton().find("left_hip"), {-50, 0, 0});
     QVERIFY(errors_.isEmpty());
   }
+
+  void femRelaxationCancelled() {
+    errors_.clear();
+    auto* c = window_->controller();
+    c->setAngles(c->skeleton().find("left_hip"), {-70, 0, 0});
+    QSignalSpy done(window_, &MainWindow::relaxFinished);
+    window_->relaxCurrentPose();
+    QVERIFY(window_->isRelaxing());
+    // The solver takes the cancel at its first check: no relaxed result, no error, posing again.
+    window_->cancelRelaxation();
+    QTRY_VERIFY_WITH_TIMEOUT(!window_->isRelaxing(), 60000);
+    QVERIFY2(errors_.isEmpty(), qPrintable(errors_.join("; ")));
+    QCOMPARE(done.count(), 1);
+    QVERIFY(window_->relaxationSummary().isEmpty());
+    QVERIFY(window_->pipeline()->relaxation() == nullptr);
+    c->setAngles(c->skeleton().find("left_knee"), {20, 0, 0});
+    QVERIFY(errors_.isEmpty());
+    // The next relaxation runs to its end.
+    window_->relaxCurrentPose();
+    QTRY_VERIFY_WITH_TIMEOUT(!window_->isRelaxing(), 120000);
+    QVERIFY2(errors_.isEmpty(), qPrintable(errors_.join("; ")));
+    QCOMPARE(done.count(), 2);
+    QVERIFY(window_->relaxationSummary().contains("CG iterations"));
+  }
 };
 
 int main(int argc, char** argv) {

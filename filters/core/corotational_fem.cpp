@@ -537,6 +537,9 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       solver.solve(A.scalar, b, x, tolerance, iterations, residual);
   };
 
+  auto checkCancelled = [&]() {
+    if (options.cancelled && options.cancelled()) throw RelaxationCancelled();
+  };
   int inverted = 0;
   double energy = evaluate(posed, inverted);
   rep.energyBefore = energy;
@@ -557,6 +560,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       if (changed) energy = evaluate(posed, inverted);
     }
     for (int it = 0; it < maxIterations; ++it) {
+      checkCancelled();
       const auto assemblyStart = std::chrono::steady_clock::now();
       assemble(nullptr);
       rep.assemblySeconds += seconds(assemblyStart);
@@ -622,6 +626,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   // time, and its pose is less relaxed than the one before it.
   bool relaxedLocally = false;
   for (int round = 0; round < 3 && inverted > 0 && options.untangle; ++round) {
+    checkCancelled();
     const auto untangleStart = std::chrono::steady_clock::now();
     const Points before = posed;
     const int invertedBefore = inverted;
@@ -647,6 +652,8 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     CorotationalReport local;
     try {
       relaxNeighbourhood(rest, tets, fixedBone, posed, moved, options.untangleRelaxRings, options, &local);
+    } catch (const RelaxationCancelled&) {
+      throw;
     } catch (const std::runtime_error&) {
       // A part singular on its own (CHOLMOD refuses a projected Hessian with a zero eigenvalue, which
       // the whole mesh's coupling may not have): posed is left as untangled, for the whole-mesh solve.
@@ -719,6 +726,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     int rescues = 0;  // relaxing Newton solves after a stall
     std::vector<double> sHistory;  // s after each step
     while (s < 1.0 && rep.continuationSteps < options.maxContinuationSteps) {
+      checkCancelled();
       ++rep.continuationSteps;
       const double target = std::min(1.0, s + ds);
       path.place(target, pathNodes, move);
@@ -806,8 +814,11 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
 
 }  // namespace
 
-void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
-                       Points& posed, const CorotationalOptions& options, CorotationalReport* report) {
+namespace {
+
+/// relaxCorotational's work on posed in place (a cancelled solve leaves it part-way).
+void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,
+                  const CorotationalOptions& options, CorotationalReport* report) {
   const auto start = std::chrono::steady_clock::now();
   const Eigen::Index nV = rest.rows();
   const Eigen::Index nT = tets.rows();
@@ -880,6 +891,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
         "relaxCorotational: no node is fixed; the elastic system is singular (mark bone nodes "
         "with fixedBone >= 0)");
 
+  if (options.cancelled && options.cancelled()) throw RelaxationCancelled();
   const SingleThreadedBlas blasOnThisThread;  // the CG's threads keep the cores (see blas_threads.h)
   CorotationalReport local;
   CorotationalReport& rep = report ? *report : local;
@@ -1056,6 +1068,7 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   std::vector<Mat3> rotation(static_cast<std::size_t>(nT));
   Eigen::VectorXd rhs(n), residual0(n), x(n);
   for (int outer = 0; outer < options.outerIterations; ++outer) {
+    if (options.cancelled && options.cancelled()) throw RelaxationCancelled();
     const auto assemblyStart = std::chrono::steady_clock::now();
     // Element rotations from the current pose.
     parallelFor(std::size_t(nT), [&](std::size_t b, std::size_t e) {
@@ -1133,6 +1146,23 @@ void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<i
   }
   countInvertedAfter(posed, tets, fixedBone, rep);
   rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
+                       Points& posed, const CorotationalOptions& options, CorotationalReport* report) {
+  if (!options.cancelled) {
+    relaxInPlace(rest, tets, fixedBone, posed, options, report);
+    return;
+  }
+  const Points input = posed;
+  try {
+    relaxInPlace(rest, tets, fixedBone, posed, options, report);
+  } catch (const RelaxationCancelled&) {
+    posed = input;
+    throw;
+  }
 }
 
 void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,

@@ -1,6 +1,8 @@
 #pragma once
 // Static corotational linear-elastic relaxation of a posed tet mesh (Mueller & Gross 2004):
 // refines a skinned pose so that nearly incompressible tissue keeps its volume.
+#include <functional>
+#include <stdexcept>
 #include <vector>
 
 #include "tet_mesh.h"
@@ -139,6 +141,15 @@ struct CorotationalOptions {
   /// posed. The result may be another local minimum than from posed alone (the tissue's history):
   /// frames stay coherent rather than each finding its own minimum.
   Points startCorrection;
+  /// Optional: asked between Newton steps, continuation steps and untangling rounds (a few seconds
+  /// apart at most on a 2.7 M-tet mesh); true stops the solve with RelaxationCancelled, posed as it
+  /// came in. It may be called from the solving thread only, and must be cheap (an atomic flag).
+  std::function<bool()> cancelled;
+};
+
+/// Thrown by relaxCorotational when CorotationalOptions::cancelled answers true.
+struct RelaxationCancelled : std::runtime_error {
+  RelaxationCancelled() : std::runtime_error("relaxation cancelled") {}
 };
 
 struct CorotationalReport {
@@ -186,7 +197,8 @@ struct CorotationalReport {
 /// cgIterations / relativeResidual are then per Newton iteration); the number of inverted tets never
 /// increases, and inverted skinned tets are pushed back since the energy is finite and smooth
 /// through det F = 0. Young's modulus scales the energy only: the minimizer does not depend on it.
-/// Throws std::runtime_error if the incomplete Cholesky, CHOLMOD or two-level coarse factorization fails.
+/// Throws std::runtime_error if the incomplete Cholesky, CHOLMOD or two-level coarse factorization fails,
+/// and RelaxationCancelled (posed unchanged) when options.cancelled asks it to stop.
 void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
                        Points& posed, const CorotationalOptions& options,
                        CorotationalReport* report = nullptr);
