@@ -1,5 +1,7 @@
 #include "vtkReposeCorotationalRelax.h"
 
+#include <string>
+
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
@@ -158,12 +160,42 @@ int vtkReposeCorotationalRelax::RequestData(
       options.startCorrection =
         Eigen::Map<const repose::Points>(this->LastCorrection.data(), nodes.rows(), 3);
     }
-    options.cancelled = [this]() { return this->CancelRequested.load(); };
+    // Where the solve is, as VTK progress (the fraction is the continuation's path, 0 before it) and
+    // text; an observer may call Cancel() from its ProgressEvent.
+    options.checkpoint = [this](const repose::RelaxationProgress& p) {
+      std::string text;
+      switch (p.phase)
+      {
+        case repose::RelaxationProgress::Setup:
+          text = "FEM set-up";
+          break;
+        case repose::RelaxationProgress::Newton:
+          text = "Newton step " + std::to_string(p.newtonIterations + 1);
+          break;
+        case repose::RelaxationProgress::Untangling:
+          text = "untangling inverted tets";
+          break;
+        case repose::RelaxationProgress::Neighbourhood:
+          text = "relaxing untangled neighbourhoods";
+          break;
+        case repose::RelaxationProgress::Continuation:
+          text = "fold-free continuation, step " + std::to_string(p.continuationSteps + 1) + ", path " +
+            std::to_string(static_cast<int>(100.0 * p.pathFraction)) + " %";
+          break;
+        case repose::RelaxationProgress::Linear:
+          text = "linear solve " + std::to_string(p.outerIteration + 1);
+          break;
+      }
+      this->SetProgressText(text.c_str());
+      this->UpdateProgress(p.phase == repose::RelaxationProgress::Continuation ? p.pathFraction : 0.0);
+      return this->CancelRequested.load();
+    };
     const repose::Points input = nodes;
     repose::CorotationalReport report;
     this->LastCorrection.clear();  // a failed run leaves nothing to start from
     repose::relaxCorotational(restNodes, tets, fixedBone, nodes, options, &report);
     this->CancelRequested = false;
+    this->SetProgressText(nullptr);  // the executive's own progress events carry none
     this->LastCorrection.resize(3 * static_cast<std::size_t>(nodes.rows()));
     Eigen::Map<repose::Points>(this->LastCorrection.data(), nodes.rows(), 3) = nodes - input;
     this->LastRestMTime = restTime;
@@ -202,12 +234,14 @@ int vtkReposeCorotationalRelax::RequestData(
   catch (const repose::RelaxationCancelled&)
   {
     this->CancelRequested = false;
+    this->SetProgressText(nullptr);
     this->Cancelled = true;
     return 0;
   }
   catch (const std::exception& e)
   {
     this->CancelRequested = false;
+    this->SetProgressText(nullptr);
     vtkErrorMacro(<< e.what());
     return 0;
   }

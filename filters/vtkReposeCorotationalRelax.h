@@ -122,6 +122,11 @@ public:
   vtkGetMacro(LastUntangleTime, double);
   vtkGetMacro(LastContinuationTime, double);  ///< includes its assembly and solves
 
+  /// While it runs, the solve reports where it is at each check as VTK progress: ProgressEvent, with
+  /// GetProgressText() "FEM set-up", "Newton step N", "untangling inverted tets", "relaxing untangled
+  /// neighbourhoods", "fold-free continuation, step N, path P %" or "linear solve N", and GetProgress()
+  /// the continuation's path fraction (0 before it). A ProgressEvent observer may call Cancel().
+  ///
   /// Stops the running execution (or, if none runs, the next one) at its next check: between Newton
   /// steps, continuation steps and untangling rounds, a few seconds apart at most on a 2.7 M-tet
   /// mesh. That execution fails (the executive says so; the filter adds no error of its own), leaves

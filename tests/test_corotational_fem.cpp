@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <map>
 #include <random>
+#include <set>
 #include <stdexcept>
 
 #include "block_sparse_cg.h"
@@ -688,18 +689,27 @@ TEST(FixedCorotatedFem, CancelStopsTheSolveAndLeavesPosedAsItCameIn) {
   repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, plain, opt, &plainReport);
   ASSERT_GT(plainReport.continuationSteps, 0);  // every kind of check point is on the way
   int calls = 0;
-  opt.cancelled = [&calls]() {
+  std::set<int> phases;
+  double furthest = 0;
+  opt.checkpoint = [&](const repose::RelaxationProgress& p) {
     ++calls;
+    phases.insert(p.phase);
+    furthest = std::max(furthest, p.pathFraction);
     return false;
   };
   Points counted = f.folded;
   repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, counted, opt, nullptr);
   EXPECT_EQ((counted - plain).cwiseAbs().maxCoeff(), 0.0);
   ASSERT_GT(calls, plainReport.newtonIterations + plainReport.continuationSteps);
+  for (auto phase : {repose::RelaxationProgress::Setup, repose::RelaxationProgress::Newton,
+                     repose::RelaxationProgress::Continuation})
+    EXPECT_TRUE(phases.count(phase)) << "phase " << phase << " reported";
+  EXPECT_GT(furthest, 0.5);  // the path's progress is reported
+  EXPECT_LT(furthest, 1.0);
   const int total = calls;
   for (int stopAt : {1, 2, total / 3, total / 2, total - 1, total}) {
     calls = 0;
-    opt.cancelled = [&calls, stopAt]() { return ++calls >= stopAt; };
+    opt.checkpoint = [&calls, stopAt](const repose::RelaxationProgress&) { return ++calls >= stopAt; };
     Points x = f.folded;
     EXPECT_THROW(repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, x, opt, nullptr), repose::RelaxationCancelled)
         << "cancelled at check " << stopAt << " of " << total;
@@ -708,7 +718,7 @@ TEST(FixedCorotatedFem, CancelStopsTheSolveAndLeavesPosedAsItCameIn) {
   }
   // The linear model asks too.
   CorotationalOptions linear;
-  linear.cancelled = []() { return true; };
+  linear.checkpoint = [](const repose::RelaxationProgress& p) { return p.phase == repose::RelaxationProgress::Linear; };
   Points y = f.blended;
   EXPECT_THROW(repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, y, linear, nullptr), repose::RelaxationCancelled);
   EXPECT_EQ((y - f.blended).cwiseAbs().maxCoeff(), 0.0);

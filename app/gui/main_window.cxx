@@ -25,6 +25,8 @@
 #include <QStatusBar>
 #include <QVBoxLayout>
 #include <QtConcurrent/QtConcurrentRun>
+#include <vtkAlgorithm.h>
+#include <vtkCommand.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
 #include <vtkPointData.h>
@@ -661,6 +663,7 @@ void MainWindow::relaxCurrentPose() {
     relaxGeneration_ = caseGeneration_;
     for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, skinning_}) w->setEnabled(false);
     relax_->setText("Cancel relaxation");
+    relaxObserver_ = pipeline_->relaxation()->AddObserver(vtkCommand::ProgressEvent, this, &MainWindow::relaxProgress);
     std::shared_ptr<Pipeline> p = pipeline_;
     relaxWatcher_.setFuture(QtConcurrent::run([p]() -> QString {
       try {
@@ -676,6 +679,8 @@ void MainWindow::relaxCurrentPose() {
 
 void MainWindow::relaxDone() {
   relaxing_ = false;
+  if (relaxObserver_ && pipeline_ && pipeline_->relaxation()) pipeline_->relaxation()->RemoveObserver(relaxObserver_);
+  relaxObserver_ = 0;
   for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, relax_, skinning_}) w->setEnabled(true);
   relax_->setText(kRelaxText);
   const QString error = relaxWatcher_.result();
@@ -707,6 +712,20 @@ void MainWindow::relaxDone() {
   emit relaxFinished();
   // A pose set while the solver ran (a loaded pose) wins over the relaxed result.
   if (posedWhileRelaxing_) poseChanged();
+}
+
+QString MainWindow::relaxationStatus() const { return relaxLabel_->text(); }
+
+void MainWindow::relaxProgress(vtkObject* caller, unsigned long, void*) {
+  const char* text = vtkAlgorithm::SafeDownCast(caller)->GetProgressText();
+  if (!text || !*text) return;  // the executive's own start and end reports
+  const QString line = QString("Relaxing (FEM): %1…").arg(QString::fromUtf8(text));
+  QMetaObject::invokeMethod(
+    this,
+    [this, line] {
+      if (isRelaxing() && relax_->isEnabled()) relaxLabel_->setText(line);  // not once cancelling
+    },
+    Qt::QueuedConnection);
 }
 
 void MainWindow::cancelRelaxation() {

@@ -13,6 +13,8 @@
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
 
+class vtkObject;
+
 #include "label_table.h"
 #include "pose_controller.h"
 #include "preprocess_worker.h"
@@ -75,6 +77,8 @@ public:
   void cancelRelaxation();
   bool isRelaxing() const { return relaxing_; }
   QString relaxationSummary() const { return relaxSummary_; }
+  /// The relaxation label: while the solver runs, where it is ("Relaxing (FEM): Newton step 3…").
+  QString relaxationStatus() const;
 
   // --- state for tests and the benchmark -----------------------------------------------------
   PoseController* controller() { return &controller_; }
@@ -112,6 +116,8 @@ private:
   void relaxDone();
   void dropRelaxation();
   void stopRelaxation();  // cancels a running relaxation and waits for it
+  // On the solver's thread: its progress text, shown in the relaxation label (queued to the UI thread).
+  void relaxProgress(vtkObject* caller, unsigned long event, void* data);
   void showAnimationFrame(int frame);
   void updateActions();
   void showError(const QString& message);
@@ -130,6 +136,7 @@ private:
   bool relaxing_ = false;  // from relaxCurrentPose() until relaxDone() has run
   bool posedWhileRelaxing_ = false;
   int relaxGeneration_ = 0;
+  unsigned long relaxObserver_ = 0;  // the ProgressEvent observer on the relaxation filter while it runs
   QString relaxSummary_;
   bool slicesDirty_ = false;
   int caseGeneration_ = 0;

@@ -308,6 +308,9 @@ private slots:
     QSignalSpy done(window_, &MainWindow::relaxFinished);
     window_->relaxCurrentPose();
     QVERIFY(window_->isRelaxing());
+    // The label follows the solver.
+    QTRY_VERIFY_WITH_TIMEOUT(window_->relaxationStatus().contains("Newton step") || !window_->isRelaxing(), 60000);
+    QVERIFY2(window_->isRelaxing(), "the solver's progress was not shown while it ran");
     // Posing is held while the FEM thread owns the pipeline.
     c->setAngles(c->skeleton().find("left_knee"), {30, 0, 0});
     QTRY_VERIFY_WITH_TIMEOUT(!window_->isRelaxing(), 120000);

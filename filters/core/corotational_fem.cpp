@@ -537,8 +537,17 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       solver.solve(A.scalar, b, x, tolerance, iterations, residual);
   };
 
-  auto checkCancelled = [&]() {
-    if (options.cancelled && options.cancelled()) throw RelaxationCancelled();
+  // Continuation: the path's progress, for the checkpoint (see CorotationalOptions::checkpoint).
+  bool onPath = false;
+  double pathS = 0.0;
+  auto checkCancelled = [&](RelaxationProgress::Phase phase) {
+    if (!options.checkpoint) return;
+    RelaxationProgress p;
+    p.phase = onPath ? RelaxationProgress::Continuation : phase;
+    p.newtonIterations = rep.newtonIterations;
+    p.continuationSteps = rep.continuationSteps;
+    p.pathFraction = pathS;
+    if (options.checkpoint(p)) throw RelaxationCancelled();
   };
   int inverted = 0;
   double energy = evaluate(posed, inverted);
@@ -560,7 +569,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       if (changed) energy = evaluate(posed, inverted);
     }
     for (int it = 0; it < maxIterations; ++it) {
-      checkCancelled();
+      checkCancelled(RelaxationProgress::Newton);
       const auto assemblyStart = std::chrono::steady_clock::now();
       assemble(nullptr);
       rep.assemblySeconds += seconds(assemblyStart);
@@ -626,7 +635,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   // time, and its pose is less relaxed than the one before it.
   bool relaxedLocally = false;
   for (int round = 0; round < 3 && inverted > 0 && options.untangle; ++round) {
-    checkCancelled();
+    checkCancelled(RelaxationProgress::Untangling);
     const auto untangleStart = std::chrono::steady_clock::now();
     const Points before = posed;
     const int invertedBefore = inverted;
@@ -725,8 +734,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     double s = 0.0, ds = 0.125;
     int rescues = 0;  // relaxing Newton solves after a stall
     std::vector<double> sHistory;  // s after each step
+    onPath = true;
     while (s < 1.0 && rep.continuationSteps < options.maxContinuationSteps) {
-      checkCancelled();
+      pathS = s;
+      checkCancelled(RelaxationProgress::Continuation);
       ++rep.continuationSteps;
       const double target = std::min(1.0, s + ds);
       path.place(target, pathNodes, move);
@@ -891,7 +902,7 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
         "relaxCorotational: no node is fixed; the elastic system is singular (mark bone nodes "
         "with fixedBone >= 0)");
 
-  if (options.cancelled && options.cancelled()) throw RelaxationCancelled();
+  if (options.checkpoint && options.checkpoint(RelaxationProgress{})) throw RelaxationCancelled();
   const SingleThreadedBlas blasOnThisThread;  // the CG's threads keep the cores (see blas_threads.h)
   CorotationalReport local;
   CorotationalReport& rep = report ? *report : local;
@@ -1068,7 +1079,12 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
   std::vector<Mat3> rotation(static_cast<std::size_t>(nT));
   Eigen::VectorXd rhs(n), residual0(n), x(n);
   for (int outer = 0; outer < options.outerIterations; ++outer) {
-    if (options.cancelled && options.cancelled()) throw RelaxationCancelled();
+    if (options.checkpoint) {
+      RelaxationProgress p;
+      p.phase = RelaxationProgress::Linear;
+      p.outerIteration = outer;
+      if (options.checkpoint(p)) throw RelaxationCancelled();
+    }
     const auto assemblyStart = std::chrono::steady_clock::now();
     // Element rotations from the current pose.
     parallelFor(std::size_t(nT), [&](std::size_t b, std::size_t e) {
@@ -1152,7 +1168,7 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
 
 void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
                        Points& posed, const CorotationalOptions& options, CorotationalReport* report) {
-  if (!options.cancelled) {
+  if (!options.checkpoint) {
     relaxInPlace(rest, tets, fixedBone, posed, options, report);
     return;
   }
@@ -1232,6 +1248,12 @@ void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<
   o.startCorrection.resize(0, 3);
   o.continuation = CorotationalOptions::Never;
   o.untangle = false;
+  if (options.checkpoint)
+    o.checkpoint = [&options](const RelaxationProgress& p) {
+      RelaxationProgress part = p;
+      part.phase = RelaxationProgress::Neighbourhood;
+      return options.checkpoint(part);
+    };
   relaxCorotational(partRest, partTetNodes, partFixed, partPosed, o, report);
   for (Eigen::Index k = 0; k < m; ++k)
     if (partFixed[std::size_t(k)] < 0) posed.row(global[std::size_t(k)]) = partPosed.row(k);

@@ -141,13 +141,24 @@ struct CorotationalOptions {
   /// posed. The result may be another local minimum than from posed alone (the tissue's history):
   /// frames stay coherent rather than each finding its own minimum.
   Points startCorrection;
-  /// Optional: asked between Newton steps, continuation steps and untangling rounds (a few seconds
-  /// apart at most on a 2.7 M-tet mesh); true stops the solve with RelaxationCancelled, posed as it
-  /// came in. It may be called from the solving thread only, and must be cheap (an atomic flag).
-  std::function<bool()> cancelled;
+  /// Optional: called with where the solve is before the set-up, each Newton step, each untangling
+  /// round, each continuation step and each linear outer iteration (a few seconds apart at most on a
+  /// 2.7 M-tet mesh), on the solving thread. Returning true stops the solve with RelaxationCancelled,
+  /// posed as it came in. It must be cheap (report progress, read an atomic flag).
+  std::function<bool(const struct RelaxationProgress&)> checkpoint;
 };
 
-/// Thrown by relaxCorotational when CorotationalOptions::cancelled answers true.
+/// Where a relaxation is, as CorotationalOptions::checkpoint sees it.
+struct RelaxationProgress {
+  enum Phase { Setup, Newton, Untangling, Neighbourhood, Continuation, Linear };
+  Phase phase = Setup;
+  int newtonIterations = 0;   ///< whole-mesh Newton steps so far (Neighbourhood: that part's own)
+  int continuationSteps = 0;  ///< fold-free continuation steps so far
+  double pathFraction = 0.0;  ///< Continuation: how far along the bones' paths (0 to 1)
+  int outerIteration = 0;     ///< Linear: the outer iteration about to start (0-based)
+};
+
+/// Thrown by relaxCorotational when CorotationalOptions::checkpoint answers true.
 struct RelaxationCancelled : std::runtime_error {
   RelaxationCancelled() : std::runtime_error("relaxation cancelled") {}
 };
@@ -198,7 +209,7 @@ struct CorotationalReport {
 /// increases, and inverted skinned tets are pushed back since the energy is finite and smooth
 /// through det F = 0. Young's modulus scales the energy only: the minimizer does not depend on it.
 /// Throws std::runtime_error if the incomplete Cholesky, CHOLMOD or two-level coarse factorization fails,
-/// and RelaxationCancelled (posed unchanged) when options.cancelled asks it to stop.
+/// and RelaxationCancelled (posed unchanged) when options.checkpoint asks it to stop.
 void relaxCorotational(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
                        Points& posed, const CorotationalOptions& options,
                        CorotationalReport* report = nullptr);
