@@ -9,6 +9,8 @@
 
 namespace repose {
 
+struct RelaxationProgress;
+
 struct CorotationalOptions {
   /// Poisson's ratio, in (-1, 0.5). Near 0.5 the tissue is nearly incompressible (and CG slower).
   double poisson = 0.49;
@@ -145,7 +147,7 @@ struct CorotationalOptions {
   /// round, each continuation step and each linear outer iteration (a few seconds apart at most on a
   /// 2.7 M-tet mesh), on the solving thread. Returning true stops the solve with RelaxationCancelled,
   /// posed as it came in. It must be cheap (report progress, read an atomic flag).
-  std::function<bool(const struct RelaxationProgress&)> checkpoint;
+  std::function<bool(const RelaxationProgress&)> checkpoint;
 };
 
 /// Where a relaxation is, as CorotationalOptions::checkpoint sees it.
