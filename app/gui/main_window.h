@@ -13,11 +13,11 @@
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
 
-class vtkObject;
-
 #include "label_table.h"
 #include "pose_controller.h"
 #include "preprocess_worker.h"
+
+class vtkObject;
 
 class QAction;
 class QCheckBox;

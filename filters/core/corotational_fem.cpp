@@ -82,6 +82,11 @@ bool trialAdmissible(const Points& P, const Tets& tets, const std::vector<char>&
   return !barrierCrossed.load() && count.load() <= inverted;
 }
 
+/// Tells options.checkpoint where the solve is; throws RelaxationCancelled when it answers true.
+void reachCheckpoint(const CorotationalOptions& options, const RelaxationProgress& progress) {
+  if (options.checkpoint && options.checkpoint(progress)) throw RelaxationCancelled();
+}
+
 /// The report's inverted counts after relaxing: all of them, and those no free node can repair.
 void countInvertedAfter(const Points& P, const Tets& tets, const std::vector<int>& fixedBone, CorotationalReport& rep) {
   rep.invertedAfter = rep.invertedRigid = 0;
@@ -547,7 +552,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     p.newtonIterations = rep.newtonIterations;
     p.continuationSteps = rep.continuationSteps;
     p.pathFraction = pathS;
-    if (options.checkpoint(p)) throw RelaxationCancelled();
+    reachCheckpoint(options, p);
   };
   int inverted = 0;
   double energy = evaluate(posed, inverted);
@@ -902,7 +907,7 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
         "relaxCorotational: no node is fixed; the elastic system is singular (mark bone nodes "
         "with fixedBone >= 0)");
 
-  if (options.checkpoint && options.checkpoint(RelaxationProgress{})) throw RelaxationCancelled();
+  reachCheckpoint(options, RelaxationProgress{});
   const SingleThreadedBlas blasOnThisThread;  // the CG's threads keep the cores (see blas_threads.h)
   CorotationalReport local;
   CorotationalReport& rep = report ? *report : local;
@@ -1079,12 +1084,10 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
   std::vector<Mat3> rotation(static_cast<std::size_t>(nT));
   Eigen::VectorXd rhs(n), residual0(n), x(n);
   for (int outer = 0; outer < options.outerIterations; ++outer) {
-    if (options.checkpoint) {
-      RelaxationProgress p;
-      p.phase = RelaxationProgress::Linear;
-      p.outerIteration = outer;
-      if (options.checkpoint(p)) throw RelaxationCancelled();
-    }
+    RelaxationProgress linearProgress;
+    linearProgress.phase = RelaxationProgress::Linear;
+    linearProgress.outerIteration = outer;
+    reachCheckpoint(options, linearProgress);
     const auto assemblyStart = std::chrono::steady_clock::now();
     // Element rotations from the current pose.
     parallelFor(std::size_t(nT), [&](std::size_t b, std::size_t e) {
