@@ -1371,6 +1371,7 @@ TEST(TwoLevelPreconditioner, SingularCoarseMatrixIsShiftedNotRefused) {
   repose::TwoLevelPreconditioner M;
   M.aggregate(A, positions, 20);
   ASSERT_NO_THROW(M.update(A, positions));
+  EXPECT_TRUE(M.coarseUsed());
   EXPECT_GT(M.coarseShift(), 0.0);
   std::mt19937 rng(3);
   std::normal_distribution<double> g;
@@ -1393,6 +1394,36 @@ TEST(TwoLevelPreconditioner, SingularCoarseMatrixIsShiftedNotRefused) {
   const repose::BlockSparseMatrix3f K = clampedBoxStiffness(b, 5.0, 1.0, positions);
   M.update(K, positions);
   EXPECT_EQ(M.coarseShift(), 0.0);
+}
+
+TEST(TwoLevelPreconditioner, IndefiniteCoarseMatrixFallsBackToBlockJacobi) {
+  // A negated stiffness: Ac is negative definite, which no shift up to 1e-2 of its mean diagonal
+  // repairs. The preconditioner is then block Jacobi alone instead of an error.
+  const Box b = makeBox(12, 4, 4, 1.0);
+  Points positions;
+  repose::BlockSparseMatrix3f A = clampedBoxStiffness(b, 5.0, 1.0, positions);
+  const int n = A.rows();
+  for (float& v : A.values) v = -v;
+  repose::TwoLevelPreconditioner M, jacobi;
+  M.aggregate(A, positions, 20);
+  jacobi.aggregate(A, positions, 20);
+  ASSERT_NO_THROW(M.update(A, positions));
+  EXPECT_FALSE(M.coarseUsed());
+  jacobi.updateFine(A);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  Eigen::VectorXd r(3 * n), z, zJacobi;
+  for (int i = 0; i < 3 * n; ++i) r(i) = g(rng);
+  EXPECT_EQ(M.apply(r, z), jacobi.apply(r, zJacobi));
+  EXPECT_EQ((z - zJacobi).norm(), 0.0);
+  // The next update with a definite matrix has its coarse level again.
+  const repose::BlockSparseMatrix3f K = clampedBoxStiffness(b, 5.0, 1.0, positions);
+  M.update(K, positions);
+  EXPECT_TRUE(M.coarseUsed());
+  M.apply(r, z);
+  jacobi.updateFine(K);
+  jacobi.apply(r, zJacobi);
+  EXPECT_GT((z - zJacobi).norm(), 1e-6 * z.norm());
 }
 
 TEST(TwoLevelPreconditioner, NeedsFewerIterationsThanBlockJacobi) {

@@ -495,22 +495,33 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
   // Ac + shift I still makes an SPD preconditioner, which keeps CG exact and only slows that mode, so
   // the factorization is retried with a growing shift (relative to Ac's mean diagonal) instead of the
   // solve failing.
+  // (CHOLMOD's simplicial LDL^T, which it picks for small matrices, succeeds on an indefinite one:
+  // its D then has a negative entry, whose log makes the log-determinant NaN.)
+  auto factorizedDefinite = [&]() {
+    s.llt.factorize(s.Ac);
+    return s.llt.info() == Eigen::Success && std::isfinite(s.llt.logDeterminant());
+  };
   s.llt.setShift(0.0);
   s.lastShift = 0.0;
-  s.llt.factorize(s.Ac);
-  if (s.llt.info() != Eigen::Success) {
-    const double scale = s.Ac.rows() > 0 ? s.Ac.diagonal().cwiseAbs().mean() : 0.0;
-    for (double relative = 1e-10; relative <= 1e-2 && s.llt.info() != Eigen::Success && scale > 0; relative *= 100) {
-      s.lastShift = relative * scale;
-      s.llt.setShift(s.lastShift);
-      s.llt.factorize(s.Ac);
-    }
+  bool definite = factorizedDefinite();
+  const double scale = s.Ac.rows() > 0 ? s.Ac.diagonal().cwiseAbs().mean() : 0.0;
+  for (double relative = 1e-10; relative <= 1e-2 && !definite && scale > 0; relative *= 100) {
+    s.lastShift = relative * scale;
+    s.llt.setShift(s.lastShift);
+    definite = factorizedDefinite();
   }
-  if (s.llt.info() != Eigen::Success)
-    throw std::runtime_error("TwoLevelPreconditioner: the coarse matrix is not positive definite, even shifted");
+  // Beyond that shift Ac is not semi-definite (float rounding of a few enormous barrier blocks, or a
+  // matrix that is not a projected Hessian): block Jacobi alone is still a valid preconditioner, and
+  // a slower solve is better than none.
+  if (!definite) {
+    s.useCoarse = false;
+    s.lastShift = 0.0;
+  }
 }
 
 double TwoLevelPreconditioner::coarseShift() const { return impl_->lastShift; }
+
+bool TwoLevelPreconditioner::coarseUsed() const { return impl_->useCoarse; }
 
 double TwoLevelPreconditioner::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { return impl_->apply(r, z); }
 

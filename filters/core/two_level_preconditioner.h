@@ -37,11 +37,14 @@ class TwoLevelPreconditioner : public BlockPreconditioner {
   /// Prepares for A (same pattern as given to aggregate): block-Jacobi inverses, the rigid modes
   /// about the aggregates' centroids at positions (the current pose: modes of the rotated aggregate),
   /// Ac = P^T A P and its Cholesky factorization (the symbolic analysis is kept for later calls).
-  /// A singular Ac (A only semi-definite) is factorized with a small diagonal shift instead.
-  /// Throws std::runtime_error if even a shift of 1e-2 of Ac's mean diagonal does not factorize.
+  /// A singular Ac (A only semi-definite) is factorized with a small diagonal shift instead. If even
+  /// a shift of 1e-2 of Ac's mean diagonal does not factorize, the coarse level is left out until the
+  /// next update (coarseUsed() false): M^-1 = D^-1 alone.
   void update(const BlockSparseMatrix3f& A, const Points& positions);
   /// The diagonal shift of the last update's coarse factorization (0: none was needed).
   double coarseShift() const;
+  /// Whether the last update's preconditioner has its coarse level (false after updateFine()).
+  bool coarseUsed() const;
   /// Prepares for A without the coarse level: M^-1 = D^-1 alone (block Jacobi).
   void updateFine(const BlockSparseMatrix3f& A);
 
