@@ -605,6 +605,7 @@ std::string Pipeline::relaxationSummary() const {
           ? ", " + std::to_string(relax_->GetUntangledNodes()) + " nodes untangled (their neighbourhoods " +
               std::to_string(relax_->GetUntangleNewtonIterations()) + " Newton iterations)"
           : std::string())
+    << (relax_->GetWarmStarted() ? ", started from the last relaxation" : "")
     << (relax_->GetContinuationSteps() > 0
           ? std::string(", fold-free continuation ") + std::to_string(relax_->GetContinuationSteps()) + " steps " +
               (relax_->GetContinuationUsed() ? "(kept)" : "(not kept)")

@@ -160,6 +160,7 @@ private:
   QComboBox* skinning_;
   QPushButton* relax_;
   QCheckBox* showBefore_;
+  QCheckBox* relaxWarmStart_;
   QLabel* relaxLabel_;
   QSlider* skinOpacity_;
   QLabel* frameLabel_;

@@ -1,6 +1,7 @@
 // The main window on the tiny phantom, driven like a user: open (background preprocessing), pose
 // through the joint controls and by dragging in the 3D view, undo, export, motion capture, FEM,
 // errors as messages, and an image baseline of the 3D view. Needs an X display (xvfb-run).
+#include <QCheckBox>
 #include <QDir>
 #include <QFileInfo>
 #include <QMouseEvent>
@@ -26,6 +27,7 @@
 #include "repose_pipeline.h"
 #include "scene_view.h"
 #include "slice_views.h"
+#include "vtkReposeCorotationalRelax.h"
 
 using namespace repose;
 
@@ -346,6 +348,40 @@ private slots:
     QVERIFY2(errors_.isEmpty(), qPrintable(errors_.join("; ")));
     QCOMPARE(done.count(), 2);
     QVERIFY(window_->relaxationSummary().contains("CG iterations"));
+  }
+
+  void femRelaxationWarmStart() {
+    errors_.clear();
+    auto* c = window_->controller();
+    auto* warm = window_->findChild<QCheckBox*>("relaxWarmStart");
+    QVERIFY(warm);
+    QVERIFY(!warm->isChecked());  // off by default: a pose's result does not depend on the ones before
+    QSignalSpy done(window_, &MainWindow::relaxFinished);
+    auto relax = [&](bool fromLast) {
+      warm->setChecked(fromLast);
+      window_->relaxCurrentPose();
+      QTRY_VERIFY_WITH_TIMEOUT(!window_->isRelaxing(), 120000);
+      QVERIFY2(errors_.isEmpty(), qPrintable(errors_.join("; ")));
+    };
+    c->resetAll();
+    c->setAngles(c->skeleton().find("left_hip"), {-40, 0, 0});
+    relax(false);
+    QVERIFY(!window_->relaxationSummary().contains("started from the last relaxation"));
+    // A small pose change, solved from the last relaxation: fewer Newton steps than from its skinning.
+    c->setAngles(c->skeleton().find("left_hip"), {-44, 0, 0});
+    relax(true);
+    QVERIFY2(window_->relaxationSummary().contains("started from the last relaxation"),
+             qPrintable(window_->relaxationSummary()));
+    const int fromLast = window_->pipeline()->relaxation()->GetNewtonIterations();
+    c->setAngles(c->skeleton().find("left_hip"), {-45, 0, 0});  // away and back: the same pose, relaxed again
+    c->setAngles(c->skeleton().find("left_hip"), {-44, 0, 0});
+    relax(false);
+    QVERIFY(!window_->relaxationSummary().contains("started from the last relaxation"));
+    const int fromSkinning = window_->pipeline()->relaxation()->GetNewtonIterations();
+    qInfo("Newton steps: %d from the last relaxation, %d from skinning", fromLast, fromSkinning);
+    QVERIFY2(fromLast < fromSkinning, qPrintable(QString("Newton steps: %1 from the last relaxation, %2 from skinning")
+                                                     .arg(fromLast).arg(fromSkinning)));
+    QCOMPARE(done.count(), 3);
   }
 };
 
