@@ -90,7 +90,9 @@ struct CorotationalOptions {
   /// phantom's walk, bodies 0.12-0.35 % short at stiffness 3): after Newton has converged, each
   /// region's pressure is folded into a fixed multiplier term Lambda_r (V_r - V_r0) (augmented
   /// Lagrangian) and Newton resumes, until every region is within regionVolumeTolerance of its rest
-  /// volume or after maxRegionVolumeUpdates such updates. Raising the stiffness instead works too,
+  /// volume, after maxRegionVolumeUpdates such updates, or once an update has not halved the worst
+  /// region's excess when that is within 10 regionVolumeTolerance (the Newton solves' own accuracy
+  /// is then the limit). Raising the stiffness instead works too,
   /// but slows CG (stiffness 300: twice the CG iterations) where an update costs a few Newton steps.
   std::vector<int> volumeRegions;
   /// The regions of the fold-free continuation's path before its end (empty: volumeRegions), the
