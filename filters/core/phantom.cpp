@@ -184,15 +184,6 @@ struct Bone {
   }
 };
 
-/// Relative rotations of a joint about x (flexion / extension) from x0 to x1 degrees, every `step`.
-std::vector<Eigen::Matrix3d> flexionRange(double x0, double x1, double step = 10) {
-  std::vector<Eigen::Matrix3d> out{Eigen::Matrix3d::Identity()};
-  const double d2r = 3.14159265358979323846 / 180;
-  for (double x = x0; x <= x1 + 1e-9; x += step)
-    out.push_back(Eigen::AngleAxisd(x * d2r, V3::UnitX()).toRotationMatrix());
-  return out;
-}
-
 /// Relative rotations of a ball joint: Rz(rotation) Ry(abduction) Rx(flexion) over the given
 /// ranges (degrees), every `step`.
 std::vector<Eigen::Matrix3d> ballRange(double x0, double x1, double y0, double y1, double z0, double z1,
