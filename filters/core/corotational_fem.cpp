@@ -744,6 +744,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     Eigen::VectorXd predictor(n);
     double s = 0.0, ds = 0.125;
     int rescues = 0;  // relaxing Newton solves after a stall
+    double rescuedAt = -1.0;  // s of the last one
     std::vector<double> sHistory;  // s after each step
     onPath = true;
     while (s < 1.0 && rep.continuationSteps < options.maxContinuationSteps) {
@@ -777,9 +778,14 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       // A stall (no fold-free fraction of the predictor, or steps that stay short, see below) may
       // be the tissue itself, carried along by predictors alone, blocking the way: it is relaxed
       // at this s (Newton, the bones held) and the path tried again, a few times per path.
+      // A stall where the last rescue was made (the path has not moved 1e-3 on since) is the same
+      // block: that rescue had relaxed the tissue here already, so another finds the same minimum
+      // (medium phantom, 45 degree pose: rescues 2 and 3 at s = 0.6279, after the first at 0.6276).
       auto relaxHere = [&]() {
-        if (rescues >= 3) return false;
+        if (rescues >= 3 || (rescuedAt >= 0.0 && s - rescuedAt < 1e-3)) return false;
         ++rescues;
+        ++rep.continuationRescues;
+        rescuedAt = s;
         energy = evaluate(posed, inverted);
         firstNorm = -1.0;
         newton(std::max(1, options.maxNewtonIterations / 2));
@@ -796,10 +802,17 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       ds = alpha == 1.0 ? std::min(2.0 * ds, 0.5) : alpha * ds;
       // The path stalls where bones press tissue to nothing (no fold-free way on): steps shrink and
       // stay short. Short steps alone are no stall, as the path may squeeze through and steps grow
-      // again (tiny phantom, squat frames 372 and 388: steps below 1e-4, then the end of the path).
+      // again (CMU walk, tiny phantom: steps down to 6e-5 of the path, then its end). So the stall
+      // is judged by the pace of the last `window` steps: at that pace, would the path need more than
+      // twice its step budget in all? (CMU walk: 108 steps at most; medium's shoulder: 400 and more
+      // from step 45 on, where a path of 1e-3 in `window` steps used to be the test, from step 48.)
       sHistory.push_back(s);
       const std::size_t window = 20;
-      if (ds < 1e-6 || (sHistory.size() > window && s - sHistory[sHistory.size() - 1 - window] < 1e-3)) {
+      const auto slow = [&]() {
+        const double pace = (s - sHistory[sHistory.size() - 1 - window]) / double(window);
+        return double(rep.continuationSteps) * pace + (1.0 - s) > 2.0 * options.maxContinuationSteps * pace;
+      };
+      if (ds < 1e-6 || (s < 1.0 && sHistory.size() > window && slow())) {
         if (relaxHere()) continue;
         break;
       }

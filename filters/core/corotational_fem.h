@@ -125,8 +125,9 @@ struct CorotationalOptions {
   Continuation continuation = IfInverted;
   /// ... in at most this many steps (the step length adapts: doubled after a full step, cut to the
   /// accepted fraction otherwise); the direct result is kept if the path is not completed. Where the
-  /// path stalls, the tissue is first relaxed there (Newton with the bones held, at most 3 times per
-  /// path): carried by predictors alone it can block the way (walk frame 192, tiny phantom: stalled
+  /// path stalls (10 steps that move it less than 1e-3), the tissue is first relaxed there (Newton
+  /// with the bones held, at most 3 times per path, and not again where the path has not moved 1e-3
+  /// since): carried by predictors alone it can block the way (walk frame 192, tiny phantom: stalled
   /// at s = 0.45, completed after one such solve).
   int maxContinuationSteps = 200;
   /// ... and this many Newton corrections per intermediate step (the last one gets
@@ -189,6 +190,7 @@ struct CorotationalReport {
   int continuationSteps = 0;             ///< FixedCorotated: steps of the fold-free continuation (0: not run)
   bool continuationUsed = false;         ///< ... whose result replaced the direct solve's
   double continuationSeconds = 0.0;      ///< ... and its time (included in seconds)
+  int continuationRescues = 0;           ///< ... and its relaxing Newton solves where the path stalled
   bool correctedStart = false;           ///< options.startCorrection was taken
 };
 
