@@ -125,7 +125,8 @@ struct CorotationalOptions {
   Continuation continuation = IfInverted;
   /// ... in at most this many steps (the step length adapts: doubled after a full step, cut to the
   /// accepted fraction otherwise); the direct result is kept if the path is not completed. Where the
-  /// path stalls (10 steps that move it less than 1e-3), the tissue is first relaxed there (Newton
+  /// path stalls (at the pace of its last 20 steps it would need more than twice this budget in
+  /// all, or a step falls below 1e-6 of it), the tissue is first relaxed there (Newton
   /// with the bones held, at most 3 times per path, and not again where the path has not moved 1e-3
   /// since): carried by predictors alone it can block the way (walk frame 192, tiny phantom: stalled
   /// at s = 0.45, completed after one such solve).
