@@ -605,13 +605,18 @@ std::string Pipeline::relaxationSummary() const {
           ? ", " + std::to_string(relax_->GetUntangledNodes()) + " nodes untangled (their neighbourhoods " +
               std::to_string(relax_->GetUntangleNewtonIterations()) + " Newton iterations)"
           : std::string())
+    << (relax_->GetStrainedRegionNodes() > 0
+          ? ", strained region first (" + std::to_string(relax_->GetStrainedRegionNodes()) + " nodes, " +
+              std::to_string(relax_->GetStrainedRegionNewtonIterations()) + " Newton iterations)"
+          : std::string())
     << (relax_->GetWarmStarted() ? ", started from the last relaxation" : "")
     << (relax_->GetContinuationSteps() > 0
           ? std::string(", fold-free continuation ") + std::to_string(relax_->GetContinuationSteps()) + " steps " +
               (relax_->GetContinuationUsed() ? "(kept)" : "(not kept)")
           : std::string())
     << ", " << relax_->GetLastRelaxTime() << " s (assembly " << relax_->GetLastAssemblyTime() << " s, solves "
-    << relax_->GetLastSolveTime() << " s, untangling " << relax_->GetLastUntangleTime() << " s, continuation "
+    << relax_->GetLastSolveTime() << " s, strained region " << relax_->GetLastStrainedRegionTime()
+    << " s, untangling " << relax_->GetLastUntangleTime() << " s, continuation "
     << relax_->GetLastContinuationTime() << " s)";
   return m.str();
 }

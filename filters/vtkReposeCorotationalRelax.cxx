@@ -119,6 +119,8 @@ int vtkReposeCorotationalRelax::RequestData(
     options.regionVolumeTolerance = this->RegionVolumeTolerance;
     options.inversionBarrier = this->InversionBarrier;
     options.untangleRelaxRings = this->UntangleRelaxRings;
+    options.strainedRegionThreshold = this->StrainedRegionThreshold;
+    options.strainedRegionRings = this->StrainedRegionRings;
     options.continuation = this->Continuation == 2 ? repose::CorotationalOptions::Always
       : this->Continuation == 1                    ? repose::CorotationalOptions::IfInverted
                                                    : repose::CorotationalOptions::Never;
@@ -178,6 +180,9 @@ int vtkReposeCorotationalRelax::RequestData(
         case repose::RelaxationProgress::Neighbourhood:
           text = "relaxing untangled neighbourhoods";
           break;
+        case repose::RelaxationProgress::StrainedRegion:
+          text = "relaxing the strained region";
+          break;
         case repose::RelaxationProgress::Continuation:
           text = "fold-free continuation, step " + std::to_string(p.continuationSteps + 1) + ", path " +
             std::to_string(static_cast<int>(100.0 * p.pathFraction)) + " %";
@@ -230,6 +235,9 @@ int vtkReposeCorotationalRelax::RequestData(
     this->ContinuationSteps = report.continuationSteps;
     this->ContinuationUsed = report.continuationUsed;
     this->LastContinuationTime = report.continuationSeconds;
+    this->StrainedRegionNodes = report.strainedRegionNodes;
+    this->StrainedRegionNewtonIterations = report.strainedRegionNewtonIterations;
+    this->LastStrainedRegionTime = report.strainedRegionSeconds;
   }
   catch (const repose::RelaxationCancelled&)
   {
@@ -275,6 +283,8 @@ void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Model: " << (this->Model == 1 ? "FixedCorotated" : "Linear") << "\n";
   os << indent << "MaxNewtonIterations: " << this->MaxNewtonIterations << "\n";
   os << indent << "UntangleRelaxRings: " << this->UntangleRelaxRings << "\n";
+  os << indent << "StrainedRegionThreshold: " << this->StrainedRegionThreshold << "\n";
+  os << indent << "StrainedRegionRings: " << this->StrainedRegionRings << "\n";
   os << indent << "StepTolerance: " << this->StepTolerance << "\n";
   os << indent << "EnergyTolerance: " << this->EnergyTolerance << "\n";
   os << indent << "Continuation: " << this->Continuation << "\n";

@@ -74,6 +74,14 @@ public:
   /// repose::CorotationalOptions::untangleRelaxRings). -1: the whole mesh after every round.
   vtkSetClampMacro(UntangleRelaxRings, int, -1, 1000);
   vtkGetMacro(UntangleRelaxRings, int);
+  /// Model 1, from a cold start: the tets strained by skinning above this threshold (strain energy
+  /// density over the shear modulus), their free nodes and StrainedRegionRings rings of neighbours
+  /// are relaxed on their own before the whole mesh (default 1e-4, rings 3; see
+  /// repose::CorotationalOptions::strainedRegionThreshold). 0: the whole mesh at once.
+  vtkSetClampMacro(StrainedRegionThreshold, double, 0.0, 1e30);
+  vtkGetMacro(StrainedRegionThreshold, double);
+  vtkSetClampMacro(StrainedRegionRings, int, 0, 1000);
+  vtkGetMacro(StrainedRegionRings, int);
   /// Model 1 with the barrier: when the solve leaves a fold (inverted tets with a free node), solve
   /// again by a fold-free continuation from the rest shape (see
   /// repose::CorotationalOptions::continuation). 0: never, 1: if tets stay inverted (default),
@@ -108,6 +116,10 @@ public:
   vtkGetMacro(UntangledNodes, int);
   /// Newton iterations of the neighbourhood solves after untangling (not in GetNewtonIterations()).
   vtkGetMacro(UntangleNewtonIterations, int);
+  /// Unknowns and Newton iterations of the strained region's solve (0: it did not run; its
+  /// iterations are not in GetNewtonIterations()).
+  vtkGetMacro(StrainedRegionNodes, int);
+  vtkGetMacro(StrainedRegionNewtonIterations, int);
   /// Region-volume multiplier updates made (see RegionVolumeTolerance).
   vtkGetMacro(RegionVolumeUpdates, int);
   /// Steps of the fold-free continuation (0: it did not run), and whether its result was kept.
@@ -121,10 +133,11 @@ public:
   vtkGetMacro(LastSolveTime, double);
   vtkGetMacro(LastUntangleTime, double);
   vtkGetMacro(LastContinuationTime, double);  ///< includes its assembly and solves
+  vtkGetMacro(LastStrainedRegionTime, double); ///< includes its assembly and solves
 
   /// While it runs, the solve reports where it is at each check as VTK progress: ProgressEvent, with
-  /// GetProgressText() "FEM set-up", "Newton step N", "untangling inverted tets", "relaxing untangled
-  /// neighbourhoods", "fold-free continuation, step N, path P %" or "linear solve N", and GetProgress()
+  /// GetProgressText() "FEM set-up", "relaxing the strained region", "Newton step N", "untangling
+  /// inverted tets", "relaxing untangled neighbourhoods", "fold-free continuation, step N, path P %" or "linear solve N", and GetProgress()
   /// the continuation's path fraction (0 before it). A ProgressEvent observer may call Cancel().
   ///
   /// Stops the running execution (or, if none runs, the next one) at its next check: between Newton
@@ -161,6 +174,11 @@ protected:
   int RegionVolumeUpdates = 0;
   bool InversionBarrier = true;
   int UntangleRelaxRings = 2;
+  double StrainedRegionThreshold = 1e-4;
+  int StrainedRegionRings = 3;
+  int StrainedRegionNodes = 0;
+  int StrainedRegionNewtonIterations = 0;
+  double LastStrainedRegionTime = 0.0;
   int Continuation = 1;
   char* SkeletonJSON = nullptr;
   bool WarmStart = false;

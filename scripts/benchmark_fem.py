@@ -32,6 +32,7 @@ MODELS = {"linear": 0, "fixed": 1}
 VOLUMES = {"none": 0, "body": 1, "segments": 2, "tissues": 3}
 GUARDS = {"penalty": 0, "barrier": 1}
 CONTINUATIONS = {"never": 0, "if-inverted": 1, "always": 2}
+STRAINED = {"first": 1e-4, "off": 0.0}
 
 
 def pose_json(angle):
@@ -43,7 +44,7 @@ def pose_json(angle):
         "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}})
 
 
-def child(case, model, solver, angle, volume, barrier=1, continuation=1, warm=0.0):
+def child(case, model, solver, angle, volume, barrier=1, continuation=1, warm=0.0, strained=1e-4):
     """Skins the case to the pose, then relaxes it (model/solver < 0: skinning only); prints one JSON line."""
     from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
     from repose import vtkReposeCorotationalRelax, vtkReposeSkinning
@@ -69,6 +70,7 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1, warm=0.
         fem.SetVolumeRegions(volume)
         fem.SetInversionBarrier(bool(barrier))
         fem.SetContinuation(continuation)
+        fem.SetStrainedRegionThreshold(strained)
         fem.SetSkeletonJSON(open(f"{case}/skeleton.json").read())
         fem.SetMaxIterations(20000)
         if warm > 0:  # the pose before, then the pose itself from its correction
@@ -85,7 +87,9 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1, warm=0.
                       solve=fem.GetLastSolveTime(), untangle=fem.GetLastUntangleTime(),
                       untangle_newton=fem.GetUntangleNewtonIterations(),
                       continuation=fem.GetContinuationSteps() if fem.GetContinuationUsed() else -fem.GetContinuationSteps(),
-                      continuation_s=fem.GetLastContinuationTime(), warm_started=fem.GetWarmStarted())
+                      continuation_s=fem.GetLastContinuationTime(), warm_started=fem.GetWarmStarted(),
+                      strained_nodes=fem.GetStrainedRegionNodes(), strained_newton=fem.GetStrainedRegionNewtonIterations(),
+                      strained_s=fem.GetLastStrainedRegionTime())
         posed = fem.GetOutput()
     cells = vtk_to_numpy(rest.GetCells().GetConnectivityArray()).reshape(-1, 4)
 
@@ -98,9 +102,9 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1, warm=0.
     print("@@" + json.dumps(result))
 
 
-def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1, warm=0.0):
+def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1, warm=0.0, strained=1e-4):
     p = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", case, str(model), str(solver), str(angle),
-                        str(volume), str(barrier), str(continuation), str(warm)],
+                        str(volume), str(barrier), str(continuation), str(warm), str(strained)],
                        capture_output=True, text=True)
     m = re.search(r"^@@(.*)$", p.stdout, re.M)
     if p.returncode != 0 or not m:
@@ -111,7 +115,7 @@ def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1, w
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
         child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), int(sys.argv[6]),
-              int(sys.argv[7]), int(sys.argv[8]), float(sys.argv[9]))
+              int(sys.argv[7]), int(sys.argv[8]), float(sys.argv[9]), float(sys.argv[10]))
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
@@ -121,6 +125,9 @@ def main():
     ap.add_argument("--guards", default="barrier", help="inversion guard of the fixed-corotated model: barrier, penalty")
     ap.add_argument("--continuations", default="if-inverted",
                     help="fold-free continuation of the fixed-corotated model: if-inverted, never, always")
+    ap.add_argument("--strained", default="first",
+                    help="the fixed-corotated model's strained region: first (relaxed on its own before the whole"
+                         " mesh, the default), off; a comma list compares them")
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None, help="reuses <work>/<size>/case when it exists")
     ap.add_argument("--angle", type=float, default=45.0, help="hip/knee/shoulder/elbow angle of the pose (degrees)")
@@ -150,32 +157,43 @@ def main():
                     if model == "fixed" and continuation != "if-inverted":
                         label += f", continuation {continuation}"
                     for volume in args.volumes.split(",") if model == "fixed" else ["none"]:
-                        for solver in args.solvers.split(","):
-                            r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume],
-                                               GUARDS[guard], CONTINUATIONS[continuation], args.warm)
-                            if r and args.warm > 0:
-                                label_w = f"{label}, warm from {args.angle - args.warm:g} deg"
-                                label_w += "" if r["warm_started"] else " (not taken)"
-                                label_w += f" (that pose: {r['previous_seconds']:.1f} s)"
-                                rows.append((size, label_w, volume, solver, r, err))
-                                continue
-                            rows.append((size, label, volume, solver, r or base, err))
-                            print(f"{size} {label} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
-    print("| size | nodes | tets | model | regions | solver | FEM s / pose | assembly s | solves s | untangle s (neighbourhood Newton its) |"
+                        for strained in args.strained.split(",") if model == "fixed" else ["off"]:
+                            if strained not in STRAINED:
+                                sys.exit(f"--strained: {strained} is not one of {', '.join(STRAINED)}")
+                            label_s = label + (", strained region not first" if model == "fixed" and strained == "off" else "")
+                            for solver in args.solvers.split(","):
+                                r, err = run_child(case, MODELS[model], SOLVERS[solver], args.angle, VOLUMES[volume],
+                                                   GUARDS[guard], CONTINUATIONS[continuation], args.warm, STRAINED[strained])
+                                if r and args.warm > 0:
+                                    label_w = f"{label_s}, warm from {args.angle - args.warm:g} deg"
+                                    label_w += "" if r["warm_started"] else " (not taken)"
+                                    label_w += f" (that pose: {r['previous_seconds']:.1f} s)"
+                                    rows.append((size, label_w, volume, solver, r, err))
+                                    continue
+                                rows.append((size, label_s, volume, solver, r or base, err))
+                                print(f"{size} {label_s} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
+    print("| size | nodes | tets | model | regions | solver | FEM s / pose | strained region nodes (Newton its, s) | assembly s | solves s | untangle s (neighbourhood Newton its) |"
           " continuation steps (s) | Newton its | CG its | inverted before -> after (only bone nodes) | volume ratio |"
           " peak MiB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for size, model, volume, solver, r, err in rows:
         if err:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | failed: {err} | | | | | | | | | |")
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | failed: {err} | | | | | | | | | | |")
         elif "seconds" not in r:
-            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | | | | | | {r['volume_ratio']:.4f} |"
+            print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | | | | | | | | | | | | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")
         else:
             print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | {r['seconds']:.2f} |"
-                  f" {r['assembly']:.2f} | {r['solve']:.2f} | {r['untangle']:.2f} ({r['untangle_newton']}) | {continuation_cell(r)} | {r['newton']} |"
+                  f" {strained_cell(r)} | {r['assembly']:.2f} | {r['solve']:.2f} | {r['untangle']:.2f} ({r['untangle_newton']}) | {continuation_cell(r)} | {r['newton']} |"
                   f" {r['cg']} | {r['before']} -> {r['after']} ({r['rigid']}) | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")
+
+
+def strained_cell(r):
+    """Unknowns, Newton steps and seconds of the strained region's own solve ("-": not run)."""
+    if r.get("strained_nodes", 0) == 0:
+        return "-"
+    return f"{r['strained_nodes']} ({r['strained_newton']}, {r['strained_s']:.1f} s)"
 
 
 def continuation_cell(r):

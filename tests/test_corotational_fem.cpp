@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "block_sparse_cg.h"
+#include "continuation_stall.h"
 #include "corotational_fem.h"
 #include "parallel_for.h"
 #include "signed_svd.h"
@@ -682,6 +683,49 @@ TEST(FixedCorotatedFem, FoldFreeContinuationLeavesNoFoldAndFindsTheMinimum) {
 // A cancel check answered true stops the solve wherever it is asked (Newton, untangling rounds, the
 // fold-free continuation), with RelaxationCancelled and posed as it came in; never answered true, it
 // changes nothing.
+// The continuation's stall test judges the pace of the last 20 steps against twice the step budget
+// (200 steps: 400), not the step length: a path that slows down and squeezes through goes on.
+TEST(ContinuationStall, PaceAgainstTwiceTheBudget) {
+  using repose::continuationPaceStalls;
+  auto path = [](std::vector<double> steps) {  // s after each step
+    std::vector<double> s;
+    double at = 0.0;
+    for (double d : steps) s.push_back(at = std::min(1.0, at + d));
+    return s;
+  };
+  // 20 steps of 1e-3 after 0.5 in 10 steps: 480 steps still to go at that pace, 510 in all.
+  std::vector<double> steps(10, 0.05);
+  steps.insert(steps.end(), 20, 1e-3);
+  EXPECT_TRUE(continuationPaceStalls(path(steps), 30, 200));
+  EXPECT_FALSE(continuationPaceStalls(path(steps), 30, 300));  // 510 against 600
+  // Fewer than 21 steps known: no pace yet, however short the steps.
+  EXPECT_FALSE(continuationPaceStalls(path(std::vector<double>(20, 1e-7)), 20, 200));
+  EXPECT_TRUE(continuationPaceStalls(path(std::vector<double>(21, 1e-7)), 21, 200));
+  // The walk's slowest path: short steps (6e-5 of the path), then the pace picks up; at no point
+  // does it project more than 400 steps.
+  std::vector<double> walk(8, 0.06);
+  walk.insert(walk.end(), 12, 6e-5);
+  walk.insert(walk.end(), 40, 0.0135);
+  const std::vector<double> walkPath = path(walk);
+  for (std::size_t k = 1; k <= walkPath.size(); ++k)
+    EXPECT_FALSE(continuationPaceStalls(std::vector<double>(walkPath.begin(), walkPath.begin() + std::ptrdiff_t(k)),
+                                        int(k), 200))
+        << "after step " << k;
+  // Just inside and just beyond twice the budget: a pace of 1e-3 with 0.35 to go after 20 steps
+  // needs 371 steps in all; with 0.45 to go, 471.
+  EXPECT_FALSE(continuationPaceStalls(path({0.63, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3,
+                                             1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3}),
+                                      21, 200));
+  EXPECT_TRUE(continuationPaceStalls(path({0.53, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3,
+                                            1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3}),
+                                     21, 200));
+  // A path at its end, or one that does not move: done, and stalled.
+  EXPECT_FALSE(continuationPaceStalls(path(std::vector<double>(30, 0.05)), 30, 200));
+  std::vector<double> still(25, 0.0);
+  still[0] = 0.4;
+  EXPECT_TRUE(continuationPaceStalls(path(still), 25, 200));
+}
+
 TEST(FixedCorotatedFem, CancelStopsTheSolveAndLeavesPosedAsItCameIn) {
   const FoldedBar f = foldedBar();
   CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
@@ -801,6 +845,99 @@ TEST(FixedCorotatedFem, UntanglingRoundsRelaxTheNeighbourhoodThenTheWholeMesh) {
   EXPECT_LT((x - y).cwiseAbs().maxCoeff(), 1e-3);
   for (Eigen::Index i = 0; i < x.rows(); ++i)
     if (f.fixed[std::size_t(i)] >= 0) EXPECT_EQ(x.row(i), f.folded.row(i));
+}
+
+// A bar bent at a joint as skinning bends a limb: bones hold its end slabs, the tissue left of
+// x = 10 stays, right of x = 14 turns rigidly about the joint, and only between is it strained.
+struct SkinnedJoint {
+  Box b = makeBox(24, 4, 4, 1.0);
+  std::vector<int> fixed;
+  Points skinned;
+};
+SkinnedJoint skinnedJoint(double angle) {
+  SkinnedJoint j;
+  const Box& b = j.b;
+  j.fixed.assign(std::size_t(b.nodes.rows()), -1);
+  j.skinned = b.nodes;
+  const Eigen::Vector3d joint(12, 2, 2);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (Eigen::Index i = 0; i < b.nodes.rows(); ++i) {
+    const double x = b.nodes(i, 0), w = std::clamp((x - 10.0) / 4.0, 0.0, 1.0);
+    const Eigen::Vector3d p = b.nodes.row(i).transpose();
+    j.skinned.row(i) = ((1 - w) * p + w * (R * (p - joint) + joint)).transpose();
+    if (x <= 2.0) j.fixed[std::size_t(i)] = 0;
+    if (x >= 22.0) j.fixed[std::size_t(i)] = 1;
+  }
+  return j;
+}
+
+// From a cold start the strained region goes first, on its own: the joint's tissue and three rings,
+// not the rigidly moved rest. The whole mesh then needs fewer Newton steps to the same minimum. A warm
+// start, a threshold no tet reaches and a threshold of 0 go straight to the whole mesh.
+TEST(FixedCorotatedFem, StrainedRegionFirstReachesTheSameMinimumInFewerWholeMeshSteps) {
+  const SkinnedJoint j = skinnedJoint(0.9);
+  const std::size_t nFree = std::size_t(std::count(j.fixed.begin(), j.fixed.end(), -1));
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
+  opt.continuation = CorotationalOptions::Never;
+  // At the tolerances of a pose (the filter's): fewer whole-mesh steps, to no higher an energy.
+  opt.stepTolerance = 1e-2;
+  opt.energyTolerance = 1e-3;
+  Points first = j.skinned, whole = j.skinned;
+  CorotationalReport firstReport, wholeReport;
+  repose::relaxCorotational(j.b.nodes, j.b.tets, j.fixed, first, opt, &firstReport);
+  opt.strainedRegionThreshold = 0.0;
+  repose::relaxCorotational(j.b.nodes, j.b.tets, j.fixed, whole, opt, &wholeReport);
+  std::printf("skinned joint: strained region %d of %zu free nodes, %d Newton steps, then %d whole-mesh ones, "
+              "against %d; energy %.9g, %.9g\n",
+              firstReport.strainedRegionNodes, nFree, firstReport.strainedRegionNewtonIterations,
+              firstReport.newtonIterations, wholeReport.newtonIterations, firstReport.energyAfter, wholeReport.energyAfter);
+  // The joint's 5 node columns (x = 10 .. 14) and 3 rings each side, of the 19 free columns.
+  EXPECT_EQ(firstReport.strainedRegionNodes, 11 * 5 * 5);
+  EXPECT_GT(firstReport.strainedRegionNewtonIterations, 0);
+  EXPECT_GT(firstReport.strainedRegionSeconds, 0.0);
+  EXPECT_LT(firstReport.newtonIterations, wholeReport.newtonIterations);
+  EXPECT_EQ(wholeReport.strainedRegionNodes, 0);
+  EXPECT_LE(firstReport.energyAfter, wholeReport.energyAfter * (1 + 1e-3));
+  EXPECT_EQ(firstReport.invertedAfter, 0);
+  for (Eigen::Index v = 0; v < first.rows(); ++v)
+    if (j.fixed[std::size_t(v)] >= 0) EXPECT_EQ(first.row(v), j.skinned.row(v));
+  // Solved tightly, both ways end at the same minimum.
+  opt.stepTolerance = 1e-4;
+  opt.energyTolerance = 1e-9;
+  Points tight[2] = {j.skinned, j.skinned};
+  CorotationalReport tightReport[2];
+  for (int k = 0; k < 2; ++k) {
+    opt.strainedRegionThreshold = k == 0 ? 1e-4 : 0.0;
+    repose::relaxCorotational(j.b.nodes, j.b.tets, j.fixed, tight[k], opt, &tightReport[k]);
+  }
+  EXPECT_GT(tightReport[0].strainedRegionNodes, 0);
+  EXPECT_NEAR(tightReport[0].energyAfter, tightReport[1].energyAfter, 1e-6 * tightReport[1].energyAfter);
+  EXPECT_LT((tight[0] - tight[1]).cwiseAbs().maxCoeff(), 1e-3);
+
+  // No tet strained above the threshold: nothing first.
+  opt.stepTolerance = 1e-2;
+  opt.energyTolerance = 1e-3;
+  opt.strainedRegionThreshold = 1e6;
+  Points none = j.skinned;
+  CorotationalReport noneReport;
+  repose::relaxCorotational(j.b.nodes, j.b.tets, j.fixed, none, opt, &noneReport);
+  EXPECT_EQ(noneReport.strainedRegionNodes, 0);
+  EXPECT_EQ(none, whole);
+  // A warm start is next to its minimum already.
+  opt.strainedRegionThreshold = 1e-4;
+  opt.startCorrection = first - j.skinned;
+  Points warm = skinnedJoint(0.95).skinned;
+  CorotationalReport warmReport;
+  repose::relaxCorotational(j.b.nodes, j.b.tets, j.fixed, warm, opt, &warmReport);
+  EXPECT_TRUE(warmReport.correctedStart);
+  EXPECT_EQ(warmReport.strainedRegionNodes, 0);
+  // A negative threshold or ring count is refused.
+  opt.startCorrection.resize(0, 3);
+  opt.strainedRegionThreshold = -1.0;
+  EXPECT_THROW(repose::relaxCorotational(j.b.nodes, j.b.tets, j.fixed, warm, opt), std::invalid_argument);
+  opt.strainedRegionThreshold = 1e-4;
+  opt.strainedRegionRings = -1;
+  EXPECT_THROW(repose::relaxCorotational(j.b.nodes, j.b.tets, j.fixed, warm, opt), std::invalid_argument);
 }
 
 TEST(CorotationalFem, BadInput) {

@@ -16,6 +16,7 @@
 
 #include "blas_threads.h"
 #include "bone_path.h"
+#include "continuation_stall.h"
 #include "block_sparse_cg.h"
 #include "parallel_for.h"
 #include "signed_svd.h"
@@ -25,6 +26,17 @@
 
 namespace repose {
 namespace {
+
+// The free nodes of centre and `rings` rings of free neighbours (nodes sharing a tet), as flags.
+std::vector<char> grownNeighbourhood(const Tets& tets, const std::vector<int>& fixedBone, const std::vector<int>& centre,
+                                     int rings);
+// relaxNeighbourhood on the flagged unknowns, with the phase its checkpoint reports; returns their count.
+int relaxPart(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,
+              const std::vector<char>& active, const CorotationalOptions& options, RelaxationProgress::Phase phase,
+              CorotationalReport* report);
+
+// The strained region goes first only while it is at most this fraction of the free nodes.
+constexpr double kStrainedRegionLargestPart = 0.75;
 
 double seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
@@ -557,6 +569,39 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   int inverted = 0;
   double energy = evaluate(posed, inverted);
   rep.energyBefore = energy;
+  // The strained region first (see CorotationalOptions::strainedRegionThreshold), from a cold start.
+  if (options.strainedRegionThreshold > 0.0 && !rep.correctedStart) {
+    const auto regionStart = std::chrono::steady_clock::now();
+    std::vector<char> strained(std::size_t(posed.rows()), 0);
+    const double volumeWeight = 0.5 * lambda / mu;
+    for (std::size_t t = 0; t < nT; ++t) {
+      const Vec3& s = state[t].sigma;
+      const double J = s.prod();
+      if (hasFree[t] && (s - Vec3::Ones()).squaredNorm() + volumeWeight * (J - 1.0) * (J - 1.0) > options.strainedRegionThreshold)
+        for (int a = 0; a < 4; ++a) strained[std::size_t(tets(Eigen::Index(t), a))] = 1;
+    }
+    std::vector<int> centre;
+    for (int v : freeNodes)
+      if (strained[std::size_t(v)]) centre.push_back(v);
+    const std::vector<char> unknown = grownNeighbourhood(tets, fixedBone, centre, options.strainedRegionRings);
+    const std::size_t partNodes = std::size_t(std::count(unknown.begin(), unknown.end(), char(1)));
+    // A part of most of the mesh costs what the whole does (and a pose strained all over is no
+    // skinned one: a fold from a bad start, say), so then the whole mesh goes at once.
+    if (partNodes > 0 && partNodes <= kStrainedRegionLargestPart * double(nFree)) {
+      CorotationalReport part;
+      try {
+        rep.strainedRegionNodes = relaxPart(rest, tets, fixedBone, posed, unknown, options,
+                                            RelaxationProgress::StrainedRegion, &part);
+      } catch (const RelaxationCancelled&) {
+        throw;
+      } catch (const std::runtime_error&) {
+        // A part singular on its own (see the untangling's neighbourhoods below): the whole mesh from posed.
+      }
+      rep.strainedRegionNewtonIterations = part.newtonIterations;
+      energy = evaluate(posed, inverted);
+    }
+    rep.strainedRegionSeconds = seconds(regionStart);
+  }
   Points trial = posed;
   Eigen::VectorXd step(n);
   double firstNorm = -1.0;
@@ -800,19 +845,9 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       s = alpha == 1.0 ? target : s + alpha * (target - s);
       posed = trial;
       ds = alpha == 1.0 ? std::min(2.0 * ds, 0.5) : alpha * ds;
-      // The path stalls where bones press tissue to nothing (no fold-free way on): steps shrink and
-      // stay short. Short steps alone are no stall, as the path may squeeze through and steps grow
-      // again (CMU walk, tiny phantom: steps down to 6e-5 of the path, then its end). So the stall
-      // is judged by the pace of the last `window` steps: at that pace, would the path need more than
-      // twice its step budget in all? (CMU walk: 108 steps at most; medium's shoulder: 400 and more
-      // from step 45 on, where a path of 1e-3 in `window` steps used to be the test, from step 48.)
+      // Steps that stay short: see continuation_stall.h.
       sHistory.push_back(s);
-      const std::size_t window = 20;
-      const auto slow = [&]() {
-        const double pace = (s - sHistory[sHistory.size() - 1 - window]) / double(window);
-        return double(rep.continuationSteps) * pace + (1.0 - s) > 2.0 * options.maxContinuationSteps * pace;
-      };
-      if (ds < 1e-6 || (s < 1.0 && sHistory.size() > window && slow())) {
+      if (ds < 1e-6 || continuationPaceStalls(sHistory, rep.continuationSteps, options.maxContinuationSteps)) {
         if (relaxHere()) continue;
         break;
       }
@@ -868,6 +903,8 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
                                 std::to_string(options.poisson));
   if (!(options.young > 0.0) || !std::isfinite(options.young))
     throw std::invalid_argument("relaxCorotational: Young's modulus must be positive");
+  if (!(options.strainedRegionThreshold >= 0.0) || options.strainedRegionRings < 0)
+    throw std::invalid_argument("relaxCorotational: the strained region's threshold and rings must not be negative");
   if (options.outerIterations < 1)
     throw std::invalid_argument("relaxCorotational: outerIterations must be >= 1");
   if (!(options.tolerance > 0.0))
@@ -1211,31 +1248,46 @@ void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<
     throw std::invalid_argument("relaxNeighbourhood: rest, posed and fixedBone differ in size");
   if (nT > 0 && (tets.minCoeff() < 0 || tets.maxCoeff() >= nV))
     throw std::invalid_argument("relaxNeighbourhood: a tet has a node index outside [0, " + std::to_string(nV) + ")");
-  auto isFree = [&](int v) { return fixedBone[std::size_t(v)] < 0; };
-  // Grown ring by ring over the tets (a few passes over the tet list: no adjacency to build).
-  std::vector<char> active(std::size_t(nV), 0);
-  for (int v : centre) {
+  for (int v : centre)
     if (v < 0 || v >= nV) throw std::invalid_argument("relaxNeighbourhood: centre node " + std::to_string(v) + " out of range");
-    active[std::size_t(v)] = isFree(v);
-  }
-  auto touches = [&](Eigen::Index t, const std::vector<char>& set) {
-    for (int c = 0; c < 4; ++c)
-      if (set[std::size_t(tets(t, c))]) return true;
-    return false;
-  };
+  relaxPart(rest, tets, fixedBone, posed, grownNeighbourhood(tets, fixedBone, centre, rings), options,
+            RelaxationProgress::Neighbourhood, report);
+}
+
+namespace {
+
+bool touches(const Tets& tets, Eigen::Index t, const std::vector<char>& set) {
+  for (int c = 0; c < 4; ++c)
+    if (set[std::size_t(tets(t, c))]) return true;
+  return false;
+}
+
+// Grown ring by ring over the tets (a few passes over the tet list: no adjacency to build).
+std::vector<char> grownNeighbourhood(const Tets& tets, const std::vector<int>& fixedBone, const std::vector<int>& centre,
+                                     int rings) {
+  auto isFree = [&](int v) { return fixedBone[std::size_t(v)] < 0; };
+  std::vector<char> active(fixedBone.size(), 0);
+  for (int v : centre) active[std::size_t(v)] = isFree(v);
   for (int ring = 0; ring < rings; ++ring) {
     std::vector<char> next = active;
-    for (Eigen::Index t = 0; t < nT; ++t)
-      if (touches(t, active))
+    for (Eigen::Index t = 0; t < tets.rows(); ++t)
+      if (touches(tets, t, active))
         for (int c = 0; c < 4; ++c)
           if (isFree(tets(t, c))) next[std::size_t(tets(t, c))] = 1;
     active.swap(next);
   }
+  return active;
+}
+
+int relaxPart(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,
+              const std::vector<char>& active, const CorotationalOptions& options, RelaxationProgress::Phase phase,
+              CorotationalReport* report) {
+  const Eigen::Index nV = rest.rows(), nT = tets.rows();
   // The part: the tets touching an unknown, their nodes renumbered.
   std::vector<int> local(std::size_t(nV), -1), global;
   std::vector<Eigen::Index> partTets;
   for (Eigen::Index t = 0; t < nT; ++t)
-    if (touches(t, active)) {
+    if (touches(tets, t, active)) {
       partTets.push_back(t);
       for (int c = 0; c < 4; ++c) {
         const int v = tets(t, c);
@@ -1248,7 +1300,7 @@ void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<
   // (No held node: a part of the mesh that no bone holds, singular on its own.)
   if (partTets.empty() || std::none_of(global.begin(), global.end(), [&](int v) { return !active[std::size_t(v)]; })) {
     if (report) *report = CorotationalReport{};
-    return;
+    return 0;
   }
   const Eigen::Index m = Eigen::Index(global.size());
   Points partRest(m, 3), partPosed(m, 3);
@@ -1270,15 +1322,23 @@ void relaxNeighbourhood(const Points& rest, const Tets& tets, const std::vector<
   o.startCorrection.resize(0, 3);
   o.continuation = CorotationalOptions::Never;
   o.untangle = false;
+  o.strainedRegionThreshold = 0.0;
   if (options.checkpoint)
-    o.checkpoint = [&options](const RelaxationProgress& p) {
+    o.checkpoint = [&options, phase](const RelaxationProgress& p) {
       RelaxationProgress part = p;
-      part.phase = RelaxationProgress::Neighbourhood;
+      part.phase = phase;
       return options.checkpoint(part);
     };
   relaxCorotational(partRest, partTetNodes, partFixed, partPosed, o, report);
+  int unknowns = 0;
   for (Eigen::Index k = 0; k < m; ++k)
-    if (partFixed[std::size_t(k)] < 0) posed.row(global[std::size_t(k)]) = partPosed.row(k);
+    if (partFixed[std::size_t(k)] < 0) {
+      posed.row(global[std::size_t(k)]) = partPosed.row(k);
+      ++unknowns;
+    }
+  return unknowns;
 }
+
+}  // namespace
 
 }  // namespace repose
