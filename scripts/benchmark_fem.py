@@ -115,7 +115,7 @@ def run_child(case, model, solver, angle, volume=2, barrier=1, continuation=1, w
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
         child(sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), int(sys.argv[6]),
-              int(sys.argv[7]), int(sys.argv[8]), float(sys.argv[9]), float(sys.argv[10]))
+              int(sys.argv[7]), int(sys.argv[8]), float(sys.argv[9]), float(sys.argv[10]) if len(sys.argv) > 10 else 1e-4)
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="small,medium")
