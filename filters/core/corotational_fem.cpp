@@ -35,11 +35,8 @@ int relaxPart(const Points& rest, const Tets& tets, const std::vector<int>& fixe
               const std::vector<char>& active, const CorotationalOptions& options, RelaxationProgress::Phase phase,
               CorotationalReport* report);
 
-// The strained region goes first only while it is at most this fraction of the free nodes. The CMU
-// walk's first frame, whose whole body has left the rest pose, still gains at 85 % (medium: 49 s in
-// place of 58 s) and 88.5 % (tiny: 4.3 s in place of 5.8 s); all of them, which is the whole mesh
-// without its region terms first, loses (small, 45 degree pose: 14.0 s in place of 11.2 s).
-constexpr double kStrainedRegionLargestPart = 0.9;
+// The strained region goes first only while it is at most this fraction of the free nodes.
+constexpr double kStrainedRegionLargestPart = 0.75;
 
 double seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
@@ -588,7 +585,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       if (strained[std::size_t(v)]) centre.push_back(v);
     const std::vector<char> unknown = grownNeighbourhood(tets, fixedBone, centre, options.strainedRegionRings);
     const std::size_t partNodes = std::size_t(std::count(unknown.begin(), unknown.end(), char(1)));
-    // A part of nearly all the mesh costs what the whole does (and a pose strained all over is no
+    // A part of most of the mesh costs what the whole does (and a pose strained all over is no
     // skinned one: a fold from a bad start, say), so then the whole mesh goes at once.
     if (partNodes > 0 && partNodes <= kStrainedRegionLargestPart * double(nFree)) {
       CorotationalReport part;
