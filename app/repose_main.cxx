@@ -190,7 +190,10 @@ const char* kPoseUsage =
     "                          each segment: organs keep their own volume; slower), body or none (the paper's);\n"
     "                          --relax-continuation if-inverted (default: when tets stay inverted, a fold Newton\n"
     "                          cannot leave, the pose is solved again from the rest shape along rigid bone paths,\n"
-    "                          with no tet inverted on the way; slower), never or always\n"
+    "                          with no tet inverted on the way; slower), never or always;\n"
+    "                          --relax-strained-region first (default: from a skinned start, the tets skinning\n"
+    "                          strained, at the joints, and three rings around them are relaxed on their own before\n"
+    "                          the whole mesh, when they hold at most 90 % of the free nodes) or off\n"
     "  --compare M,M,...       fidelity.csv and fidelity.png: body and per-label volume ratios, inverted tets and\n"
     "                          |det F - 1| for each of lbs, dqs, lbs+fem, dqs+fem\n";
 
@@ -202,7 +205,8 @@ const char* kAnimateUsage =
     "  Retargets every selected frame of the clip onto the case's skeleton and writes the posed mesh and\n"
     "  surfaces per frame (DIR/frames/), DIR/animation.pvd (open it in ParaView) and DIR/frames.csv (per\n"
     "  frame: body volume ratio, posing time, with --volumes each label's voxel-count ratio, and with --relax\n"
-    "  the FEM's time, Newton and CG iterations, inverted tets and continuation steps).\n"
+    "  the FEM's time, Newton and CG iterations, inverted tets, continuation steps and the strained region's\n"
+    "  nodes and Newton iterations).\n"
     "  --map FILE        JSON {BVH joint: skeleton joint}; default: CMU names onto the standard joint names\n"
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
@@ -447,10 +451,15 @@ void applyRelaxation(repose::Pipeline& pipeline, const Options& o) {
   if (continuation != "if-inverted" && continuation != "never" && continuation != "always")
     throw UsageError("--relax-continuation must be if-inverted, never or always");
   pipeline.setRelaxationContinuation(continuation);
+  const std::string strainedRegion = o.get("relax-strained-region", "first");
+  if (strainedRegion != "first" && strainedRegion != "off")
+    throw UsageError("--relax-strained-region must be first or off");
+  pipeline.setRelaxationStrainedRegion(strainedRegion);
   if (!o.has("relax")) {
     if (o.has("relax-iterations") || o.has("poisson") || o.has("relax-model") ||
-        ((o.has("relax-volume") || o.has("relax-continuation")) && !o.has("compare")))
-      throw UsageError("--relax-model, --relax-iterations, --relax-volume, --relax-continuation and --poisson need --relax");
+        ((o.has("relax-volume") || o.has("relax-continuation") || o.has("relax-strained-region")) && !o.has("compare")))
+      throw UsageError("--relax-model, --relax-iterations, --relax-volume, --relax-continuation, "
+                       "--relax-strained-region and --poisson need --relax");
     return;
   }
   const std::string model = o.get("relax-model", "fixed-corotated");
@@ -682,7 +691,9 @@ int runAnimate(const Options& o, int argc, char** argv) {
   csv << "frame,time_s,body_volume_ratio,posing_ms";
   for (const auto& [label, count] : restCounts) csv << ",label_" << label << "_ratio";
   const bool relaxing = o.has("relax");
-  if (relaxing) csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start";
+  if (relaxing)
+    csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start,"
+           "strained_region_nodes,strained_region_newton_iterations";
   csv << "\n";
   int written = 0;
   double totalPosing = 0, worstPosing = 0;
@@ -733,7 +744,8 @@ int runAnimate(const Options& o, int argc, char** argv) {
           << relax->GetNewtonIterations() << ","
           << relax->GetCGIterations() << ","
           << relax->GetInvertedAfter() << ","
-          << relax->GetContinuationSteps() << "," << int(relax->GetWarmStarted());
+          << relax->GetContinuationSteps() << "," << int(relax->GetWarmStarted()) << ","
+          << relax->GetStrainedRegionNodes() << "," << relax->GetStrainedRegionNewtonIterations();
     csv << "\n";
     ++written;
     if (written % 10 == 0) std::cout << "animate: " << written << " frames..." << std::endl;
@@ -851,7 +863,7 @@ int main(int argc, char** argv) {
     if (command == "pose")
       return runPose(Options(argc, argv, 2,
                              {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model", "relax-volume",
-                              "relax-continuation", "poisson",
+                              "relax-continuation", "relax-strained-region", "poisson",
                               "compare", "mesh"},
                              {"relax"}),
                      argc, argv);
@@ -866,8 +878,8 @@ int main(int argc, char** argv) {
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation", "poisson",
-                                 "relax-start", "compare", "mesh"},
+                                 "unit-mm", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation",
+                                 "relax-strained-region", "poisson", "relax-start", "compare", "mesh"},
                                 {"volumes", "no-root-motion", "relax"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");

@@ -533,6 +533,7 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
       filter->SetInputConnection(0, skinning_->GetOutputPort());
       filter->SetInputData(1, restMesh_);
       filter->SetSkeletonJSON(skeletonJson_.c_str());
+      relaxStrainedRegionThreshold_ = filter->GetStrainedRegionThreshold();
     }
     relax_ = filter;
     relax_->ResetCancel();  // a cancel meant for an earlier run that had already ended
@@ -542,6 +543,7 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
     relax_->SetModel(relaxModel_);
     relax_->SetVolumeRegions(relaxVolume_);
     relax_->SetContinuation(relaxContinuation_);
+    relax_->SetStrainedRegionThreshold(relaxStrainedRegionFirst_ ? relaxStrainedRegionThreshold_ : 0.0);
   } else {
     relax_ = nullptr;
   }
@@ -576,6 +578,11 @@ void Pipeline::setRelaxationVolume(const std::string& regions) {
 void Pipeline::setRelaxationContinuation(const std::string& mode) {
   relaxContinuation_ = choice(mode, {{"if-inverted", 1}, {"never", 0}, {"always", 2}}, "relaxation continuation");
   if (relax_) relax_->SetContinuation(relaxContinuation_);
+}
+
+void Pipeline::setRelaxationStrainedRegion(const std::string& mode) {
+  relaxStrainedRegionFirst_ = choice(mode, {{"first", 1}, {"off", 0}}, "relaxation strained region") != 0;
+  if (relax_) relax_->SetStrainedRegionThreshold(relaxStrainedRegionFirst_ ? relaxStrainedRegionThreshold_ : 0.0);
 }
 
 void Pipeline::setRelaxationWarmStart(bool enabled) {

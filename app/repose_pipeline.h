@@ -103,6 +103,10 @@ public:
   /// fold-free continuation from the rest shape, "never" keeps the direct result, "always" uses the
   /// continuation in every pose (see vtkReposeCorotationalRelax::Continuation).
   void setRelaxationContinuation(const std::string& mode);
+  /// From a skinned start, relax the strained region (the joints) on its own before the whole mesh:
+  /// "first" (default) or "off" (the whole mesh from the start; see
+  /// vtkReposeCorotationalRelax::StrainedRegionThreshold).
+  void setRelaxationStrainedRegion(const std::string& mode);
   /// Each relaxation starts from the last one's correction (for a sequence of poses; see
   /// vtkReposeCorotationalRelax::WarmStart). Kept per skinning method, so --compare's lbs+fem and
   /// dqs+fem each follow their own history.
@@ -160,6 +164,8 @@ private:
   int relaxModel_ = 1;                                   // vtkReposeCorotationalRelax::Model
   int relaxVolume_ = 2;
   int relaxContinuation_ = 1;                            // vtkReposeCorotationalRelax::Continuation
+  bool relaxStrainedRegionFirst_ = true;
+  double relaxStrainedRegionThreshold_ = 0.0;            // the filter's default, read when it is made
   vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;

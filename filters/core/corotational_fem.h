@@ -124,7 +124,7 @@ struct CorotationalOptions {
   /// its minimum (medium phantom, 45 degree pose: half the free nodes, 12 part steps, then 4
   /// whole-mesh steps in place of 16; 28-36 s in place of 50-55 s, to a 0.3 % lower energy). A warm
   /// start is already next to its minimum (the same pose warm: no gain), so it goes straight to the
-  /// whole mesh, and so does a part of more than 3/4 of the free nodes (no cheaper than the whole).
+  /// whole mesh, and so does a part of more than 90 % of the free nodes (no cheaper than the whole).
   /// 0: off. The default, 1e-4, takes strains above about 1 % or volume changes above 0.2 %.
   double strainedRegionThreshold = 1e-4;
   int strainedRegionRings = 3;
