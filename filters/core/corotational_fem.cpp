@@ -307,7 +307,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
                          const std::vector<int>& fixedBone,
                          const std::vector<int>& freeNodes, const std::vector<int>& incStart,
                          const std::vector<int>& incTet, const std::vector<std::uint16_t>& incColumn, NewtonMatrix& A,
-                         SpdSolver& solver, double lambda, double mu) {
+                         SpdSolver& solver, double lambda, double mu, const Points* skinned) {
   const VolumeTerm volumeTerm{lambda, options.inversionPenalty * lambda, options.inversionThreshold};
   const std::size_t nT = std::size_t(tets.rows()), nFree = freeNodes.size();
   const Eigen::Index n = Eigen::Index(3 * nFree);
@@ -570,41 +570,10 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     reachCheckpoint(options, p);
   };
   int inverted = 0;
-  double energy = evaluate(posed, inverted);
+  // The input pose's energy (skinned: before the strained region was relaxed, when it was).
+  double energy = evaluate(skinned ? *skinned : posed, inverted);
   rep.energyBefore = energy;
-  // The strained region first (see CorotationalOptions::strainedRegionThreshold), from a cold start.
-  if (options.strainedRegionThreshold > 0.0 && !rep.correctedStart) {
-    const auto regionStart = std::chrono::steady_clock::now();
-    std::vector<char> strained(std::size_t(posed.rows()), 0);
-    const double volumeWeight = 0.5 * lambda / mu;
-    for (std::size_t t = 0; t < nT; ++t) {
-      const Vec3& s = state[t].sigma;
-      const double J = s.prod();
-      if (hasFree[t] && (s - Vec3::Ones()).squaredNorm() + volumeWeight * (J - 1.0) * (J - 1.0) > options.strainedRegionThreshold)
-        for (int a = 0; a < 4; ++a) strained[std::size_t(tets(Eigen::Index(t), a))] = 1;
-    }
-    std::vector<int> centre;
-    for (int v : freeNodes)
-      if (strained[std::size_t(v)]) centre.push_back(v);
-    const std::vector<char> unknown = grownNeighbourhood(tets, fixedBone, centre, options.strainedRegionRings);
-    const std::size_t partNodes = std::size_t(std::count(unknown.begin(), unknown.end(), char(1)));
-    // A part of most of the mesh costs what the whole does (and a pose strained all over is no
-    // skinned one: a fold from a bad start, say), so then the whole mesh goes at once.
-    if (partNodes > 0 && partNodes <= kStrainedRegionLargestPart * double(nFree)) {
-      CorotationalReport part;
-      try {
-        rep.strainedRegionNodes = relaxPart(rest, tets, fixedBone, posed, unknown, options,
-                                            RelaxationProgress::StrainedRegion, &part);
-      } catch (const RelaxationCancelled&) {
-        throw;
-      } catch (const std::runtime_error&) {
-        // A part singular on its own (see the untangling's neighbourhoods below): the whole mesh from posed.
-      }
-      rep.strainedRegionNewtonIterations = part.newtonIterations;
-      energy = evaluate(posed, inverted);
-    }
-    rep.strainedRegionSeconds = seconds(regionStart);
-  }
+  if (skinned) energy = evaluate(posed, inverted);
   Points trial = posed;
   Eigen::VectorXd step(n);
   double firstNorm = -1.0;
@@ -890,6 +859,63 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
 namespace {
 
 /// relaxCorotational's work on posed in place (a cancelled solve leaves it part-way).
+// The strained region first (see CorotationalOptions::strainedRegionThreshold), before the whole
+// mesh's matrix and per-tet state exist, so that the part's own do not sit beside them. Returns
+// whether it ran (posed then holds its result).
+bool relaxStrainedRegionFirst(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone,
+                              const std::vector<RestTet>& restTets, std::size_t nFree, double lambda, double mu,
+                              Points& posed, const CorotationalOptions& options, CorotationalReport& rep) {
+  const auto regionStart = std::chrono::steady_clock::now();
+  const std::size_t nT = std::size_t(tets.rows());
+  const double volumeWeight = 0.5 * lambda / mu;
+  std::vector<char> strainedTet(nT, 0);
+  parallelFor(nT, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      const auto T = tets.row(Eigen::Index(t));
+      bool hasFree = false;
+      for (int a = 0; a < 4; ++a) hasFree = hasFree || fixedBone[std::size_t(T[a])] < 0;
+      if (!hasFree) continue;
+      Mat3 Ds;
+      const Vec3 x0 = node(posed, T[0]);
+      for (int c = 0; c < 3; ++c) Ds.col(c) = node(posed, T[c + 1]) - x0;
+      Mat3 U, V;
+      Vec3 s;
+      signedSvd(Ds * restTets[t].DmInv, U, s, V);
+      const double J = s.prod();
+      strainedTet[t] = (s - Vec3::Ones()).squaredNorm() + volumeWeight * (J - 1.0) * (J - 1.0) >
+                       options.strainedRegionThreshold;
+    }
+  }, 1024);
+  std::vector<char> strained(std::size_t(posed.rows()), 0);
+  for (std::size_t t = 0; t < nT; ++t)
+    if (strainedTet[t])
+      for (int a = 0; a < 4; ++a) strained[std::size_t(tets(Eigen::Index(t), a))] = 1;
+  strainedTet = std::vector<char>();
+  std::vector<int> centre;
+  for (std::size_t v = 0; v < strained.size(); ++v)
+    if (strained[v] && fixedBone[v] < 0) centre.push_back(int(v));
+  const std::vector<char> unknown = grownNeighbourhood(tets, fixedBone, centre, options.strainedRegionRings);
+  const std::size_t partNodes = std::size_t(std::count(unknown.begin(), unknown.end(), char(1)));
+  // A part of most of the mesh costs what the whole does (and a pose strained all over is no
+  // skinned one: a fold from a bad start, say), so then the whole mesh goes at once.
+  bool ran = false;
+  if (partNodes > 0 && partNodes <= kStrainedRegionLargestPart * double(nFree)) {
+    CorotationalReport part;
+    try {
+      rep.strainedRegionNodes = relaxPart(rest, tets, fixedBone, posed, unknown, options,
+                                          RelaxationProgress::StrainedRegion, &part);
+      ran = rep.strainedRegionNodes > 0;
+    } catch (const RelaxationCancelled&) {
+      throw;
+    } catch (const std::runtime_error&) {
+      // A part singular on its own (see the untangling's neighbourhoods): the whole mesh from posed.
+    }
+    rep.strainedRegionNewtonIterations = part.newtonIterations;
+  }
+  rep.strainedRegionSeconds = seconds(regionStart);
+  return ran;
+}
+
 void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,
                   const CorotationalOptions& options, CorotationalReport* report) {
   const auto start = std::chrono::steady_clock::now();
@@ -1024,6 +1050,17 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
     return;
   }
 
+  const double nu = options.poisson, E = options.young;
+  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double mu = E / (2.0 * (1.0 + nu));
+  Points skinned;  // the input pose, when the strained region went first
+  if (options.model == CorotationalOptions::FixedCorotated && options.strainedRegionThreshold > 0.0 &&
+      !rep.correctedStart) {
+    Points input = posed;
+    if (relaxStrainedRegionFirst(rest, tets, fixedBone, restTets, nFree, lambda, mu, posed, options, rep))
+      skinned = std::move(input);
+  }
+
   // Node -> incident (tet, local index) lists, for free nodes only (CSR).
   std::vector<int> incStart(nFree + 1, 0);
   for (Eigen::Index t = 0; t < nT; ++t)
@@ -1126,16 +1163,11 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
     column = std::vector<int>();
   }
 
-  const double nu = options.poisson, E = options.young;
-  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-  const double mu = E / (2.0 * (1.0 + nu));
-
   SpdSolver solver(options);
   solver.setNodes(rest, posed, freeNodes);
   if (options.model == CorotationalOptions::FixedCorotated) {
     relaxFixedCorotated(rest, tets, posed, options, rep, restTets, fixedBone, freeNodes, incStart, incTet, incColumn, A,
-                        solver,
-                        lambda, mu);
+                        solver, lambda, mu, skinned.rows() > 0 ? &skinned : nullptr);
     countInvertedAfter(posed, tets, fixedBone, rep);
     rep.seconds = seconds(start);
     return;
