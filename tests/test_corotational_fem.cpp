@@ -1162,6 +1162,39 @@ TEST(TetUntangling, TetsWithOnlyFixedNodesAreReportedNotMoved) {
   EXPECT_EQ((posed - before).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(TetUntangling, ANodeStaysWithinItsStarWhereItsTetsContradictEachOther) {
+  // One free node between two fixed triangles, its tets positive at rest (the node between the two
+  // planes). Posed, the planes cross over: tet A wants the node above z = 1 - x / 1000, tet B below
+  // z = -1 + x / 1000, so both are positive only beyond x = 1000, and the least-squares compromise of
+  // the two half-spaces lies about 670 away. The node must not be sent there (every tet around it
+  // turned inside out and grown a thousandfold): it stays within its star.
+  const double slope = 1e-3;
+  Points rest(7, 3), posed(7, 3);
+  rest.row(0) << 0, 0, 0;
+  const double corners[3][2] = {{-1, -1}, {1, -1}, {0, 1}};
+  for (int c = 0; c < 3; ++c) {
+    const double x = corners[c][0], y = corners[c][1];
+    rest.row(1 + c) << x, y, -1;  // below the node
+    rest.row(4 + c) << x, y, 1;   // above it
+    posed.row(1 + c) << x, y, 1 - slope * x;
+    posed.row(4 + c) << x, y, -1 + slope * x;
+  }
+  posed.row(0) = rest.row(0);
+  Tets tets(2, 4);
+  tets << 0, 1, 2, 3, 0, 4, 5, 6;
+  for (Eigen::Index t = 0; t < 2; ++t)  // orient both positive at rest
+    if (repose::tetVolume(rest.row(tets(t, 0)), rest.row(tets(t, 1)), rest.row(tets(t, 2)), rest.row(tets(t, 3))) < 0)
+      std::swap(tets(t, 2), tets(t, 3));
+  const std::vector<int> fixed = {-1, 0, 0, 0, 1, 1, 1};
+  const repose::UntangleReport rep = repose::untangleTets(rest, tets, fixed, posed);
+  EXPECT_EQ(rep.invertedBefore, 2);
+  double reach = 0.0;
+  for (Eigen::Index i = 1; i < 7; ++i) reach = std::max(reach, posed.row(i).norm());
+  EXPECT_LE(posed.row(0).norm(), reach) << "the node went to " << posed.row(0);
+  EXPECT_LE(rep.maxMove, reach);
+  for (Eigen::Index i = 1; i < 7; ++i) EXPECT_EQ(posed(i, 2), i < 4 ? 1 - slope * posed(i, 0) : -1 + slope * posed(i, 0));
+}
+
 namespace {
 
 // A random SPD matrix of 3x3 blocks: block (i, i + d) for each offset d (and its transpose), and a

@@ -137,6 +137,14 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
       int invertedHere = 0;
       double deficitHere = 0.0;
       const Vec3 x0 = node(posed, v);
+      // A node is moved within its star (no farther than its farthest neighbour): where the half-spaces
+      // contradict each other, their least-squares compromise can lie far outside it (medium phantom,
+      // linear model: a node sent 1.17 m away, every tet around it turned inside out and grown).
+      double reach = 0.0;
+      for (int k = b; k < e; ++k) {
+        const int t = inc[std::size_t(k)] / 4;
+        for (int c = 0; c < 4; ++c) reach = std::max(reach, (node(posed, tets(t, c)) - x0).norm());
+      }
       for (int k = b; k < e; ++k) {
         const int t = inc[std::size_t(k)] / 4, a = inc[std::size_t(k)] % 4;
         const Vec3 g = volumeGradient(posed, tets, t, a);
@@ -152,6 +160,7 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
       bool haveFallback = false, repaired = false;
       for (const double target : {ratio, ratio / 4, ratio / 16, ratio / 64}) {
         const Vec3 x = nearestCompromise(normal, offset, b, target, restVolume, inc, x0, options.maxLocalSteps);
+        if (!((x - x0).norm() <= reach)) continue;
         posed.row(v) = x.transpose();
         int invertedAfter = 0;
         double deficitAfter = 0.0;
@@ -170,7 +179,7 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
         if (!haveFallback && invertedAfter == invertedHere && deficitAfter < 0.999 * deficitHere) fallback = x;
         haveFallback = true;
       }
-      if (!repaired) posed.row(v) = fallback.transpose();
+      if (!repaired) posed.row(v) = fallback.transpose();  // (x0 when no candidate was within reach)
       const double move = (node(posed, v) - x0).norm();
       if (move > 0.0) {
         ++rep.nodesMoved;
