@@ -571,9 +571,24 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   };
   int inverted = 0;
   // The input pose's energy (skinned: before the strained region was relaxed, when it was).
+  // The barrier flags of a pose, as newton() sets them, but on the signs of the tet volumes: set
+  // before the first evaluation, newton() finds them unchanged and does not evaluate again.
+  auto setBarrier = [&](const Points& x) {
+    if (!(options.inversionBarrier && volumeTerm.kappa > 0)) return;
+    parallelFor(nT, [&](std::size_t b, std::size_t e) {
+      for (std::size_t t = b; t < e; ++t) {
+        const auto T = tets.row(Eigen::Index(t));
+        barrier[t] = hasFree[t] && tetVolume(node(x, T[0]), node(x, T[1]), node(x, T[2]), node(x, T[3])) > 0.0;
+      }
+    }, 4096);
+  };
+  setBarrier(skinned ? *skinned : posed);
   double energy = evaluate(skinned ? *skinned : posed, inverted);
   rep.energyBefore = energy;
-  if (skinned) energy = evaluate(posed, inverted);
+  if (skinned) {
+    setBarrier(posed);
+    energy = evaluate(posed, inverted);
+  }
   Points trial = posed;
   Eigen::VectorXd step(n);
   double firstNorm = -1.0;
@@ -660,19 +675,19 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     checkCancelled(RelaxationProgress::Untangling);
     const auto untangleStart = std::chrono::steady_clock::now();
     const Points before = posed;
-    const int invertedBefore = inverted;
     const UntangleReport u = untangleTets(rest, tets, fixedBone, posed);
     rep.untangledNodes += u.nodesMoved;
     rep.untangleSeconds += seconds(untangleStart);
     if (u.nodesMoved == 0) break;
-    energy = evaluate(posed, inverted);
-    if (inverted >= invertedBefore) {
+    // Counted on the tet volumes, without the SVDs of an evaluation: undone, the per-tet state and
+    // the energy are still those of before.
+    if (u.invertedAfter >= u.invertedBefore) {
       rep.untangledNodes -= u.nodesMoved;
       posed = before;
-      energy = evaluate(posed, inverted);
       break;
     }
     if (options.untangleRelaxRings < 0) {
+      energy = evaluate(posed, inverted);
       newton(std::max(1, options.maxNewtonIterations / 2));
       continue;
     }

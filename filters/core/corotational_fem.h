@@ -193,7 +193,7 @@ struct CorotationalReport {
   double assemblySeconds = 0.0;          ///< of which rotations + matrix assembly (all iterations)
   double solveSeconds = 0.0;             ///< of which CG (all iterations)
   int newtonIterations = 0;              ///< FixedCorotated: Gauss-Newton iterations done
-  double energyBefore = 0.0;             ///< FixedCorotated: elastic energy of the input pose
+  double energyBefore = 0.0;             ///< FixedCorotated: energy of the input pose (the barrier on its positive tets)
   double energyAfter = 0.0;              ///< ... and of the result
   bool converged = false;                ///< FixedCorotated: the step tolerance was reached
   int untangledNodes = 0;                ///< node moves made by the untangling step
