@@ -61,6 +61,13 @@ Mat3 robustRotation(const Mat3& F) {
   return U * V.transpose();
 }
 
+/// Whether tet t has a free node (one no bone holds).
+bool hasFreeNode(const Tets& tets, const std::vector<int>& fixedBone, std::size_t t) {
+  for (int a = 0; a < 4; ++a)
+    if (fixedBone[std::size_t(tets(Eigen::Index(t), a))] < 0) return true;
+  return false;
+}
+
 /// Tets with signed volume <= 0; with `only`, among the tets it flags.
 int countInverted(const Points& P, const Tets& tets, const std::vector<char>* only = nullptr) {
   std::atomic<int> count{0};
@@ -342,9 +349,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     solver.setLowRank(nRegions > 0 ? &regionCoupling : nullptr);
     if (nRegions == 0) return;
     for (std::size_t t = 0; t < nT; ++t) {
-      bool hasFree = false;
-      for (int a = 0; a < 4; ++a) hasFree = hasFree || fixedBone[std::size_t(tets(Eigen::Index(t), a))] < 0;
-      if (!hasFree || ids[t] < 0) continue;
+      if (!hasFreeNode(tets, fixedBone, t) || ids[t] < 0) continue;
       region[t] = ids[t];
       regionRest[std::size_t(region[t])] += restTets[t].volume;
     }
@@ -373,8 +378,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   bool regionsSwitched = false;
 
   std::vector<char> hasFree(nT, 0);  // per tet: some node of it is free
-  for (std::size_t t = 0; t < nT; ++t)
-    for (int a = 0; a < 4; ++a) hasFree[t] = hasFree[t] || fixedBone[std::size_t(tets(Eigen::Index(t), a))] < 0;
+  for (std::size_t t = 0; t < nT; ++t) hasFree[t] = hasFreeNode(tets, fixedBone, t);
   std::vector<TetState> state(nT);
   std::vector<char> barrier(nT, 0);  // per tet: the log barrier (1) or the penalty (0) below det F = eps
   // Energy and inverted-tet count of a pose; always refreshes the per-tet state (a rejected trial's
@@ -570,7 +574,6 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
     reachCheckpoint(options, p);
   };
   int inverted = 0;
-  // The input pose's energy (skinned: before the strained region was relaxed, when it was).
   // The barrier flags of a pose, as newton() sets them, but on the signs of the tet volumes: set
   // before the first evaluation, newton() finds them unchanged and does not evaluate again.
   auto setBarrier = [&](const Points& x) {
@@ -582,6 +585,7 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
       }
     }, 4096);
   };
+  // The input pose's energy (skinned: before the strained region was relaxed, when it was).
   setBarrier(skinned ? *skinned : posed);
   double energy = evaluate(skinned ? *skinned : posed, inverted);
   rep.energyBefore = energy;
@@ -873,7 +877,6 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
 
 namespace {
 
-/// relaxCorotational's work on posed in place (a cancelled solve leaves it part-way).
 // The strained region first (see CorotationalOptions::strainedRegionThreshold), before the whole
 // mesh's matrix and per-tet state exist, so that the part's own do not sit beside them. Returns
 // whether it ran (posed then holds its result).
@@ -886,10 +889,8 @@ bool relaxStrainedRegionFirst(const Points& rest, const Tets& tets, const std::v
   std::vector<char> strainedTet(nT, 0);
   parallelFor(nT, [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t) {
+      if (!hasFreeNode(tets, fixedBone, t)) continue;
       const auto T = tets.row(Eigen::Index(t));
-      bool hasFree = false;
-      for (int a = 0; a < 4; ++a) hasFree = hasFree || fixedBone[std::size_t(T[a])] < 0;
-      if (!hasFree) continue;
       Mat3 Ds;
       const Vec3 x0 = node(posed, T[0]);
       for (int c = 0; c < 3; ++c) Ds.col(c) = node(posed, T[c + 1]) - x0;
@@ -931,6 +932,7 @@ bool relaxStrainedRegionFirst(const Points& rest, const Tets& tets, const std::v
   return ran;
 }
 
+/// relaxCorotational's work on posed in place (a cancelled solve leaves it part-way).
 void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& fixedBone, Points& posed,
                   const CorotationalOptions& options, CorotationalReport* report) {
   const auto start = std::chrono::steady_clock::now();
