@@ -190,7 +190,8 @@ const char* kPoseUsage =
     "                          each segment: organs keep their own volume; slower), body or none (the paper's);\n"
     "                          --relax-continuation if-inverted (default: when tets stay inverted, a fold Newton\n"
     "                          cannot leave, the pose is solved again from the rest shape along rigid bone paths,\n"
-    "                          with no tet inverted on the way; slower), never or always;\n"
+    "                          with no tet inverted on the way; slower; not where a node is pinched between bones,\n"
+    "                          which no path gets past), never or always;\n"
     "                          --relax-strained-region first (default: from a skinned start, the tets skinning\n"
     "                          strained, at the joints, and three rings around them are relaxed on their own before\n"
     "                          the whole mesh, when they hold at most 90 % of the free nodes) or off\n"
@@ -205,8 +206,8 @@ const char* kAnimateUsage =
     "  Retargets every selected frame of the clip onto the case's skeleton and writes the posed mesh and\n"
     "  surfaces per frame (DIR/frames/), DIR/animation.pvd (open it in ParaView) and DIR/frames.csv (per\n"
     "  frame: body volume ratio, posing time, with --volumes each label's voxel-count ratio, and with --relax\n"
-    "  the FEM's time, Newton and CG iterations, inverted tets, continuation steps and the strained region's\n"
-    "  nodes and Newton iterations).\n"
+    "  the FEM's time, Newton and CG iterations, inverted tets, continuation steps, the strained region's\n"
+    "  nodes and Newton iterations, and the nodes pinched between bones).\n"
     "  --map FILE        JSON {BVH joint: skeleton joint}; default: CMU names onto the standard joint names\n"
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
@@ -693,7 +694,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
   const bool relaxing = o.has("relax");
   if (relaxing)
     csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start,"
-           "strained_region_nodes,strained_region_newton_iterations";
+           "strained_region_nodes,strained_region_newton_iterations,pinched_nodes";
   csv << "\n";
   int written = 0;
   double totalPosing = 0, worstPosing = 0;
@@ -745,7 +746,8 @@ int runAnimate(const Options& o, int argc, char** argv) {
           << relax->GetCGIterations() << ","
           << relax->GetInvertedAfter() << ","
           << relax->GetContinuationSteps() << "," << int(relax->GetWarmStarted()) << ","
-          << relax->GetStrainedRegionNodes() << "," << relax->GetStrainedRegionNewtonIterations();
+          << relax->GetStrainedRegionNodes() << "," << relax->GetStrainedRegionNewtonIterations() << ","
+          << relax->GetPinchedNodes();
     csv << "\n";
     ++written;
     if (written % 10 == 0) std::cout << "animate: " << written << " frames..." << std::endl;

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <initializer_list>
+#include <iomanip>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -599,7 +600,10 @@ void Pipeline::cancelRelaxation() {
 
 std::string Pipeline::relaxationSummary() const {
   if (!relax_) return "";
-  std::ostringstream m;
+  std::ostringstream m, pinched;
+  if (relax_->GetPinchedNodes() > 0)
+    pinched << ", " << relax_->GetPinchedNodes() << " nodes pinched between bones (up to "
+            << std::setprecision(2) << relax_->GetPinchedShortfall() << " mm short of room: no solve can unfold them)";
   m << "FEM relaxation: ";
   if (relax_->GetModel() == 1) m << relax_->GetNewtonIterations() << " Newton iterations, ";
   m << relax_->GetCGIterations() << " CG iterations, relative residual "
@@ -608,6 +612,7 @@ std::string Pipeline::relaxationSummary() const {
     << (relax_->GetInvertedRigidAfter() > 0
           ? " (" + std::to_string(relax_->GetInvertedRigidAfter()) + " with only bone nodes)"
           : std::string())
+    << pinched.str()
     << (relax_->GetUntangledNodes() > 0
           ? ", " + std::to_string(relax_->GetUntangledNodes()) + " nodes untangled (their neighbourhoods " +
               std::to_string(relax_->GetUntangleNewtonIterations()) + " Newton iterations)"

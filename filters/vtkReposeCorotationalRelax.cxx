@@ -225,6 +225,8 @@ int vtkReposeCorotationalRelax::RequestData(
     this->InvertedBefore = report.invertedBefore;
     this->InvertedAfter = report.invertedAfter;
     this->InvertedRigidAfter = report.invertedRigid;
+    this->PinchedNodes = report.pinchedNodes;
+    this->PinchedShortfall = report.pinchedShortfall;
     this->UntangledNodes = report.untangledNodes;
     this->UntangleNewtonIterations = report.untangleNewtonIterations;
     this->RegionVolumeUpdates = report.regionVolumeUpdates;

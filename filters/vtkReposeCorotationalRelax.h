@@ -84,8 +84,8 @@ public:
   vtkGetMacro(StrainedRegionRings, int);
   /// Model 1 with the barrier: when the solve leaves a fold (inverted tets with a free node), solve
   /// again by a fold-free continuation from the rest shape (see
-  /// repose::CorotationalOptions::continuation). 0: never, 1: if tets stay inverted (default),
-  /// 2: always.
+  /// repose::CorotationalOptions::continuation). 0: never, 1: if tets stay inverted and no node is
+  /// pinched between bones (default; see GetPinchedNodes), 2: always.
   vtkSetClampMacro(Continuation, int, 0, 2);
   vtkGetMacro(Continuation, int);
   /// Optional: the skeleton (as for vtkReposeSkinning), whose hierarchy the continuation's bone
@@ -112,6 +112,12 @@ public:
   vtkGetMacro(InvertedAfter, int);
   /// Inverted tets after relaxing whose nodes are all fixed to bones (no free node can repair them).
   vtkGetMacro(InvertedRigidAfter, int);
+  /// Free nodes of the result pinched between bones: no position keeps all their bone-face tets
+  /// positive, so no solve can remove those folds (bones pressed into each other), and the fold-free
+  /// continuation (Continuation 1) is not run for them. The shortfall: how far the worst of them stays
+  /// on the wrong side of a bone face, in the mesh's units.
+  vtkGetMacro(PinchedNodes, int);
+  vtkGetMacro(PinchedShortfall, double);
   /// Node moves made by the untangling step (0 when the solve left nothing inverted).
   vtkGetMacro(UntangledNodes, int);
   /// Newton iterations of the neighbourhood solves after untangling (not in GetNewtonIterations()).
@@ -196,6 +202,8 @@ protected:
   int InvertedBefore = 0;
   int InvertedAfter = 0;
   int InvertedRigidAfter = 0;
+  int PinchedNodes = 0;
+  double PinchedShortfall = 0.0;
   int UntangledNodes = 0;
   int UntangleNewtonIterations = 0;
   double LastAssemblyTime = 0.0;

@@ -83,7 +83,7 @@ def child(case, model, solver, angle, volume, barrier=1, continuation=1, warm=0.
         fem.Update()
         result.update(seconds=time.perf_counter() - t, cg=fem.GetCGIterations(), newton=fem.GetNewtonIterations(),
                       before=fem.GetInvertedBefore(), after=fem.GetInvertedAfter(),
-                      rigid=fem.GetInvertedRigidAfter(), assembly=fem.GetLastAssemblyTime(),
+                      rigid=fem.GetInvertedRigidAfter(), pinched=fem.GetPinchedNodes(), assembly=fem.GetLastAssemblyTime(),
                       solve=fem.GetLastSolveTime(), untangle=fem.GetLastUntangleTime(),
                       untangle_newton=fem.GetUntangleNewtonIterations(),
                       continuation=fem.GetContinuationSteps() if fem.GetContinuationUsed() else -fem.GetContinuationSteps(),
@@ -173,7 +173,7 @@ def main():
                                 rows.append((size, label_s, volume, solver, r or base, err))
                                 print(f"{size} {label_s} {volume} {solver}: {'done' if r else err}", file=sys.stderr)
     print("| size | nodes | tets | model | regions | solver | FEM s / pose | strained region nodes (Newton its, s) | assembly s | solves s | untangle s (neighbourhood Newton its) |"
-          " continuation steps (s) | Newton its | CG its | inverted before -> after (only bone nodes) | volume ratio |"
+          " continuation steps (s) | Newton its | CG its | inverted before -> after (only bone nodes; pinched nodes) | volume ratio |"
           " peak MiB |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for size, model, volume, solver, r, err in rows:
@@ -185,7 +185,7 @@ def main():
         else:
             print(f"| {size} | {r['nodes']} | {r['tets']} | {model} | {volume} | {solver} | {r['seconds']:.2f} |"
                   f" {strained_cell(r)} | {r['assembly']:.2f} | {r['solve']:.2f} | {r['untangle']:.2f} ({r['untangle_newton']}) | {continuation_cell(r)} | {r['newton']} |"
-                  f" {r['cg']} | {r['before']} -> {r['after']} ({r['rigid']}) | {r['volume_ratio']:.4f} |"
+                  f" {r['cg']} | {r['before']} -> {r['after']} ({r['rigid']}; {r['pinched']}) | {r['volume_ratio']:.4f} |"
                   f" {r['peak_mib']:.0f} |")
 
 

@@ -680,6 +680,46 @@ TEST(FixedCorotatedFem, FoldFreeContinuationLeavesNoFoldAndFindsTheMinimum) {
   EXPECT_EQ(blocked.continuationRescues, 1);
 }
 
+// Bones pushed past each other across a single free layer (bone 0: x <= 4, bone 1: x >= 6, moved by
+// -2.5). The layer's middle node has a tet on a face of each bone (the Kuhn cubes' corner tets), so it
+// must lie beyond bone 0's face (x > 4) and before bone 1's (x < 3.5): no fold-free pose exists. The
+// continuation is not started for it (the direct result stands, the node reported 0.25 short of
+// room); forced, it runs and cannot end.
+TEST(FixedCorotatedFem, NoContinuationWhereBonesPinchANode) {
+  const Box b = makeBox(10, 2, 2, 1.0);
+  std::vector<int> fixed(std::size_t(b.nodes.rows()), -1);
+  Points posed = b.nodes;
+  for (Eigen::Index i = 0; i < b.nodes.rows(); ++i) {
+    if (b.nodes(i, 0) <= 4.0) fixed[std::size_t(i)] = 0;
+    if (b.nodes(i, 0) >= 6.0) {
+      fixed[std::size_t(i)] = 1;
+      posed(i, 0) -= 2.5;
+    }
+  }
+  CorotationalOptions opt = fixedCorotated(CorotationalOptions::Cholmod);
+  opt.boneParents = {-1, 0};
+  auto relax = [&](CorotationalOptions::Continuation mode, CorotationalReport& rep) {
+    CorotationalOptions o = opt;
+    o.continuation = mode;
+    Points x = posed;
+    repose::relaxCorotational(b.nodes, b.tets, fixed, x, o, &rep);
+    return x;
+  };
+  CorotationalReport never, ifInverted, always;
+  const Points direct = relax(CorotationalOptions::Never, never);
+  const Points x = relax(CorotationalOptions::IfInverted, ifInverted);
+  ASSERT_GT(never.invertedAfter, never.invertedRigid);  // folds with free nodes remain
+  EXPECT_EQ(never.pinchedNodes, 1);
+  EXPECT_NEAR(never.pinchedShortfall, 0.25, 1e-9);
+  EXPECT_EQ(ifInverted.continuationSteps, 0);
+  EXPECT_EQ(ifInverted.pinchedNodes, 1);
+  EXPECT_EQ((x - direct).cwiseAbs().maxCoeff(), 0.0);
+  const Points y = relax(CorotationalOptions::Always, always);
+  EXPECT_GT(always.continuationSteps, 0);
+  EXPECT_FALSE(always.continuationUsed);
+  EXPECT_EQ((y - direct).cwiseAbs().maxCoeff(), 0.0);
+}
+
 // A cancel check answered true stops the solve wherever it is asked (Newton, untangling rounds, the
 // fold-free continuation), with RelaxationCancelled and posed as it came in; never answered true, it
 // changes nothing.

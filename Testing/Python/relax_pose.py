@@ -53,9 +53,10 @@ run("animate", "--case", f"{TINY}/case", "--bvh", bvh, "--frames", "600:609:4", 
 rows = list(csv.DictReader(open(f"{out}/animate/frames.csv")))
 row = rows[0]
 check(float(row["relax_s"]) > 0 and int(row["newton_iterations"]) >= 1 and int(row["cg_iterations"]) >= 1 and
-      int(row["inverted_tets"]) == 0 and int(row["continuation_steps"]) >= 0,
+      int(row["inverted_tets"]) == 0 and int(row["continuation_steps"]) >= 0 and int(row["pinched_nodes"]) == 0,
       f"frames.csv logs the FEM: {row['relax_s']} s, {row['newton_iterations']} Newton, {row['cg_iterations']} CG "
-      f"iterations, {row['inverted_tets']} inverted, {row['continuation_steps']} continuation steps", failures)
+      f"iterations, {row['inverted_tets']} inverted, {row['continuation_steps']} continuation steps, "
+      f"{row['pinched_nodes']} pinched nodes", failures)
 # Each frame after the first starts from the frame before's correction (--relax-start previous, the
 # default): fewer Newton steps than from the skinned pose alone, to the same tissue within a fraction
 # of a millimetre, the bone nodes exactly where skinning put them.

@@ -17,6 +17,7 @@
 #include "blas_threads.h"
 #include "bone_path.h"
 #include "continuation_stall.h"
+#include "pinched_nodes.h"
 #include "block_sparse_cg.h"
 #include "parallel_for.h"
 #include "signed_svd.h"
@@ -119,6 +120,13 @@ void countInvertedAfter(const Points& P, const Tets& tets, const std::vector<int
     bool rigid = true;
     for (int a = 0; a < 4; ++a) rigid = rigid && fixedBone[std::size_t(T[a])] >= 0;
     if (rigid) ++rep.invertedRigid;
+  }
+  rep.pinchedNodes = 0;
+  rep.pinchedShortfall = 0.0;
+  if (rep.invertedAfter == rep.invertedRigid) return;  // no fold a node could be pinched in
+  for (const PinchedNode& p : findPinchedNodes(P, tets, fixedBone)) {
+    ++rep.pinchedNodes;
+    rep.pinchedShortfall = std::max(rep.pinchedShortfall, p.shortfall);
   }
 }
 
@@ -744,9 +752,11 @@ void relaxFixedCorotated(const Points& rest, const Tets& tets, Points& posed, co
   // Fold-free continuation (see CorotationalOptions::continuation).
   auto invertedWithFreeNode = [&](const Points& x) { return countInverted(x, tets, &hasFree); };
   const int directInverted = invertedWithFreeNode(posed);
+  // A node pinched between bones has no fold-free place: no path can end (see Continuation).
   if (options.inversionBarrier && volumeTerm.kappa > 0 &&
       (options.continuation == CorotationalOptions::Always ||
-       (options.continuation == CorotationalOptions::IfInverted && directInverted > 0))) {
+       (options.continuation == CorotationalOptions::IfInverted && directInverted > 0 &&
+        findPinchedNodes(posed, tets, fixedBone).empty()))) {
     const auto continuationStart = std::chrono::steady_clock::now();
     const Points direct = posed;
     const bool directConverged = rep.converged;
