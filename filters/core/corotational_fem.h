@@ -49,7 +49,8 @@ struct CorotationalOptions {
   ///   psi(F) = mu |F - R|^2 + lambda/2 (det F - 1)^2   (Stomakhin et al. 2012)
   /// plus the inversion penalty below, minimized by projected Newton (per-tet Hessians with their
   /// negative eigenvalues clamped, Smith et al. 2019) with PCG and a backtracking line search that
-  /// accepts a step only if it lowers the energy and does not increase the number of inverted tets.
+  /// accepts a step only if it lowers the energy and does not increase the number of inverted tets
+  /// (starting from 9/10 of the way to where the first tet would turn flat, tet_turning_point.h).
   enum Model { Linear, FixedCorotated };
   Model model = Linear;
   /// FixedCorotated: at most this many Gauss-Newton iterations.
@@ -145,8 +146,9 @@ struct CorotationalOptions {
   /// path stalls (at the pace of its last 20 steps it would need more than twice this budget in
   /// all, or a step falls below 1e-6 of it), the tissue is first relaxed there (Newton
   /// with the bones held, at most 3 times per path, and not again where the path has not moved 1e-3
-  /// since): carried by predictors alone it can block the way (walk frame 192, tiny phantom: stalled
-  /// at s = 0.45, completed after one such solve).
+  /// since): carried by predictors alone it can block the way (walk frame 192, tiny phantom, whole
+  /// mesh at once, with the line search of an earlier release: stalled at s = 0.45, completed after
+  /// one such solve).
   int maxContinuationSteps = 200;
   /// ... and this many Newton corrections per intermediate step (the last one gets
   /// maxNewtonIterations). The predictor is itself a Newton step of the moved problem (it also takes
