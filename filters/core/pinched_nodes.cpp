@@ -56,23 +56,29 @@ double largestHalfSpaceMargin(const std::vector<Eigen::Vector3d>& normals, const
             feasible = rows[j].dot(z) >= beta[j] - 1e-9 * (1.0 + std::abs(beta[j]));
           if (feasible) best = z(3);
         }
-  return best;
+  // No vertex passed (rounding in a degenerate set of planes): no answer, taken as room.
+  return best > -std::numeric_limits<double>::infinity() ? best : std::numeric_limits<double>::infinity();
 }
 
 std::vector<PinchedNode> findPinchedNodes(const Points& posed, const Tets& tets, const std::vector<int>& fixedBone) {
   auto P = [&](int v) { return Eigen::Vector3d(posed.row(v).transpose()); };
   auto volume = [&](const int* T) { return tetVolume(P(T[0]), P(T[1]), P(T[2]), P(T[3])); };
+  // The corner (0-3) of a tet's only free node; -1 where it has none or several.
+  auto loneFreeCorner = [&](const int* T) {
+    int corner = -1;
+    for (int a = 0; a < 4; ++a)
+      if (fixedBone[std::size_t(T[a])] < 0) {
+        if (corner >= 0) return -1;
+        corner = a;
+      }
+    return corner;
+  };
   // The candidates: the one free node of each inverted tet with three bone nodes.
   std::vector<int> candidates;
   for (Eigen::Index t = 0; t < tets.rows(); ++t) {
     const int* T = tets.data() + 4 * t;
-    int free = -1, freeCount = 0;
-    for (int a = 0; a < 4; ++a)
-      if (fixedBone[std::size_t(T[a])] < 0) {
-        free = T[a];
-        ++freeCount;
-      }
-    if (freeCount == 1 && volume(T) <= 0.0) candidates.push_back(free);
+    const int local = loneFreeCorner(T);
+    if (local >= 0 && volume(T) <= 0.0) candidates.push_back(T[local]);
   }
   std::sort(candidates.begin(), candidates.end());
   candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
@@ -84,13 +90,8 @@ std::vector<PinchedNode> findPinchedNodes(const Points& posed, const Tets& tets,
   std::vector<double> size(candidates.size(), 0.0);
   for (Eigen::Index t = 0; t < tets.rows(); ++t) {
     const int* T = tets.data() + 4 * t;
-    int local = -1, freeCount = 0;
-    for (int a = 0; a < 4; ++a)
-      if (fixedBone[std::size_t(T[a])] < 0) {
-        local = a;
-        ++freeCount;
-      }
-    if (freeCount != 1) continue;
+    const int local = loneFreeCorner(T);
+    if (local < 0) continue;
     const auto it = std::lower_bound(candidates.begin(), candidates.end(), T[local]);
     if (it == candidates.end() || *it != T[local]) continue;
     const std::size_t c = std::size_t(it - candidates.begin());
