@@ -320,24 +320,28 @@ TEST(FixedCorotatedFem, InvariantToRigidMotionOfTheWholeProblem) {
 }
 
 // The two-level preconditioner inside Newton (aggregates from the rest pose, rigid modes about the
-// bent pose) reaches the minimum the direct solver does.
+// bent pose) reaches the minimum the direct solver does, with its coarse level rebuilt for every
+// solve or kept for four (coarseRefreshInterval: only the preconditioner differs).
 TEST(FixedCorotatedFem, TwoLevelPreconditionerReachesTheDirectSolversMinimum) {
   const Box b = makeBox(12, 4, 4, 1.0);
   std::vector<int> fixed;
   Points posed;
   bentBox(b, 0.8, fixed, posed);
-  Points x[2];
-  for (int k = 0; k < 2; ++k) {
+  Points x[3];
+  for (int k = 0; k < 3; ++k) {
     CorotationalOptions opt = fixedCorotated(k == 0 ? CorotationalOptions::Cholmod : CorotationalOptions::TwoLevel);
     opt.stepTolerance = 1e-6;
     opt.coarseAggregateSize = 20;  // several aggregates on this small mesh
+    opt.coarseRefreshInterval = k == 1 ? 1 : 4;
     x[k] = posed;
     CorotationalReport rep;
     repose::relaxCorotational(b.nodes, b.tets, fixed, x[k], opt, &rep);
-    EXPECT_TRUE(rep.converged) << "preconditioner " << opt.preconditioner;
+    EXPECT_TRUE(rep.converged) << "run " << k;
     EXPECT_EQ(rep.invertedAfter, 0);
+    if (k == 2) EXPECT_GT(rep.newtonIterations, 4);  // the coarse level was kept for some solves
   }
   EXPECT_LT((x[1] - x[0]).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_LT((x[2] - x[0]).cwiseAbs().maxCoeff(), 1e-4);
   EXPECT_GT((x[1] - posed).cwiseAbs().maxCoeff(), 1e-2);
 }
 
@@ -1026,6 +1030,9 @@ TEST(CorotationalFem, BadInput) {
   o2 = CorotationalOptions{};
   o2.twoLevelBelowTolerance = -1;
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
+  o2 = CorotationalOptions{};
+  o2.coarseRefreshInterval = 0;
+  EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, fixed, posed, o2), std::invalid_argument);
   // No fixed node: singular.
   std::vector<int> none(b.nodes.rows(), -1);
   EXPECT_THROW(repose::relaxCorotational(b.nodes, b.tets, none, posed, opt), std::invalid_argument);
@@ -1450,22 +1457,34 @@ TEST(BlockSparseCg, UpperStorageIsTheSameOperator) {
   EXPECT_EQ(yUpper.cwiseAbs().maxCoeff(), 0.0);
 }
 
-TEST(TwoLevelPreconditioner, SolvesAnElasticitySystemLikeADenseSolver) {
-  const Box b = makeBox(8, 4, 4, 1.0);
-  Points positions;
-  const repose::BlockSparseMatrix3f A = clampedBoxStiffness(b, 5.0, 1.0, positions);
+/// size independent standard normal numbers.
+Eigen::VectorXd gaussianVector(int size, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::VectorXd v(size);
+  for (int i = 0; i < size; ++i) v(i) = g(rng);
+  return v;
+}
+
+/// The operator CG sees (float blocks, full storage) as a dense double matrix.
+Eigen::MatrixXd denseOperator(const repose::BlockSparseMatrix3f& A) {
   const int n = A.rows();
-  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);  // the float operator CG sees
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
   for (int i = 0; i < n; ++i)
     for (int k = A.rowStart[std::size_t(i)]; k < A.rowStart[std::size_t(i) + 1]; ++k)
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
           dense(3 * i + r, 3 * A.column[std::size_t(k)] + c) = double(A.values[9 * std::size_t(k) + 3 * std::size_t(r) + c]);
-  std::mt19937 rng(5);
-  std::normal_distribution<double> g;
-  Eigen::VectorXd rhs(3 * n);
-  for (int i = 0; i < 3 * n; ++i) rhs(i) = g(rng);
-  const Eigen::VectorXd exact = dense.ldlt().solve(rhs);
+  return dense;
+}
+
+TEST(TwoLevelPreconditioner, SolvesAnElasticitySystemLikeADenseSolver) {
+  const Box b = makeBox(8, 4, 4, 1.0);
+  Points positions;
+  const repose::BlockSparseMatrix3f A = clampedBoxStiffness(b, 5.0, 1.0, positions);
+  const int n = A.rows();
+  const Eigen::VectorXd rhs = gaussianVector(3 * n, 5);
+  const Eigen::VectorXd exact = denseOperator(A).ldlt().solve(rhs);
   repose::TwoLevelPreconditioner M;
   M.aggregate(A, positions, 20);
   EXPECT_GT(M.aggregates(), 4);
@@ -1607,6 +1626,43 @@ TEST(TwoLevelPreconditioner, SingularCoarseMatrixIsShiftedNotRefused) {
   const repose::BlockSparseMatrix3f K = clampedBoxStiffness(b, 5.0, 1.0, positions);
   M.update(K, positions);
   EXPECT_EQ(M.coarseShift(), 0.0);
+}
+
+// The coarse level of one matrix beside the block Jacobi of another (the next Newton matrix): an
+// SPD preconditioner still, so CG reaches the new matrix's solution; and the old coarse correction
+// still takes the smooth error that block Jacobi alone is slow on.
+TEST(TwoLevelPreconditioner, KeptCoarseLevelServesTheNextMatrix) {
+  const Box b = makeBox(20, 5, 5, 1.0);
+  Points positions;
+  const repose::BlockSparseMatrix3f first = clampedBoxStiffness(b, 5.0, 1.0, positions);
+  const repose::BlockSparseMatrix3f next = clampedBoxStiffness(b, 8.0, 1.3, positions);
+  const int n = next.rows();
+  const Eigen::VectorXd rhs = gaussianVector(3 * n, 11);
+  const Eigen::VectorXd exact = denseOperator(next).ldlt().solve(rhs);
+
+  repose::TwoLevelPreconditioner fresh, kept;
+  fresh.aggregate(next, positions, 30);
+  fresh.update(next, positions);
+  kept.aggregate(first, positions, 30);
+  kept.update(first, positions);
+  kept.updateFineKeepingCoarse(next);
+  EXPECT_TRUE(kept.coarseUsed());
+  Eigen::VectorXd z;
+  for (unsigned trial = 0; trial < 5; ++trial) EXPECT_GT(kept.apply(gaussianVector(3 * n, 20 + trial), z), 0.0);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * n);
+  const repose::BlockCgResult withKept = repose::preconditionedBlockCg(next, rhs, x, 1e-10, 2000, kept);
+  EXPECT_LE(withKept.relativeResidual, 1e-10);
+  EXPECT_LT((x - exact).norm(), 1e-7 * exact.norm());
+  x.setZero();
+  const int withFresh = repose::preconditionedBlockCg(next, rhs, x, 1e-10, 2000, fresh).iterations;
+  x.setZero();
+  const int jacobi = repose::blockJacobiCg(next, rhs, x, 1e-10, 10000).iterations;
+  std::printf("CG iterations: fresh coarse level %d, kept %d, block Jacobi %d\n", withFresh, withKept.iterations, jacobi);
+  EXPECT_LT(withKept.iterations, jacobi / 2);
+  // After updateFine() there is no coarse level to keep: block Jacobi alone.
+  kept.updateFine(first);
+  kept.updateFineKeepingCoarse(next);
+  EXPECT_FALSE(kept.coarseUsed());
 }
 
 TEST(TwoLevelPreconditioner, IndefiniteCoarseMatrixFallsBackToBlockJacobi) {

@@ -269,13 +269,20 @@ class SpdSolver {
   void prepareTwoLevel(const BlockSparseMatrix3f& H) {
     if (!rest_) throw std::logic_error("SpdSolver: setNodes() is needed for the two-level preconditioner");
     if (!twoLevel_.aggregated()) twoLevel_.aggregate(H, freePositions(*rest_), options_.coarseAggregateSize);
+    if (solvesOnCoarse_ > 0 && solvesOnCoarse_ < options_.coarseRefreshInterval && twoLevel_.coarseUsed()) {
+      twoLevel_.updateFineKeepingCoarse(H);
+      ++solvesOnCoarse_;
+      return;
+    }
     twoLevel_.update(H, freePositions(*current_));
+    solvesOnCoarse_ = 1;
   }
 
   const CorotationalOptions& options_;
   Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> cholmod_;
   bool analyzed_ = false;
   TwoLevelPreconditioner twoLevel_;
+  int solvesOnCoarse_ = 0;  // solves that have used twoLevel_'s coarse level (see coarseRefreshInterval)
   const Points* rest_ = nullptr;
   const Points* current_ = nullptr;
   const std::vector<int>* freeNodes_ = nullptr;
@@ -1007,6 +1014,8 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
     throw std::invalid_argument("relaxCorotational: coarseAggregateSize must be >= 1");
   if (!(options.twoLevelBelowTolerance >= 0.0))
     throw std::invalid_argument("relaxCorotational: twoLevelBelowTolerance must be >= 0");
+  if (options.coarseRefreshInterval < 1)
+    throw std::invalid_argument("relaxCorotational: coarseRefreshInterval must be >= 1");
   if (options.maxNewtonIterations < 1)
     throw std::invalid_argument("relaxCorotational: maxNewtonIterations must be >= 1");
   if (options.maxContinuationSteps < 1 || options.continuationCorrections < 0)

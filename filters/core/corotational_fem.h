@@ -42,6 +42,15 @@ struct CorotationalOptions {
   /// first Newton steps also gain from the coarse space (tiny phantom, squat frame: 34 Newton steps
   /// instead of 45), so by default every solve is two-level.
   double twoLevelBelowTolerance = 1.0;
+  /// TwoLevel: the coarse level (the aggregates' rigid modes, P^T A P and its Cholesky factorization)
+  /// is rebuilt for one solve in this many; the solves in between take their own matrix's block-Jacobi
+  /// inverses beside the last coarse level. That is still an SPD preconditioner, so CG converges to
+  /// the same tolerance, and consecutive Newton matrices differ little, so a coarse level a few steps
+  /// old costs few iterations more, while its rebuild is 0.15-0.5 s of a medium-phantom Newton step
+  /// (every 4th solve: small and medium phantoms at 30, 45 and 60 degrees 5-17 % faster, a warm start
+  /// on medium 16 s against 24 s; medium's 45 degree pose from cold took one more whole-mesh Newton
+  /// step, 26-28 s against 25-26 s). 1: every solve.
+  int coarseRefreshInterval = 4;
 
   /// Linear: linearized corotational elasticity (Mueller & Gross), outerIterations solves; its
   /// volume is only kept to first order (sum of the principal stretches, not their product).

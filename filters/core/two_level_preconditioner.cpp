@@ -382,6 +382,12 @@ void TwoLevelPreconditioner::updateFine(const BlockSparseMatrix3f& A) {
   s.useCoarse = false;
 }
 
+void TwoLevelPreconditioner::updateFineKeepingCoarse(const BlockSparseMatrix3f& A) {
+  const bool coarse = impl_->useCoarse;
+  updateFine(A);
+  impl_->useCoarse = coarse;
+}
+
 void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& positions) {
   Impl& s = *impl_;
   if (A.rows() != s.n || positions.rows() != s.n)

@@ -47,6 +47,12 @@ class TwoLevelPreconditioner : public BlockPreconditioner {
   bool coarseUsed() const;
   /// Prepares for A without the coarse level: M^-1 = D^-1 alone (block Jacobi).
   void updateFine(const BlockSparseMatrix3f& A);
+  /// Prepares for A's fine level (block-Jacobi inverses, low-rank term) and keeps the coarse level
+  /// of the last update(), the rigid modes and factorized Ac of the matrix given there. M^-1 stays
+  /// symmetric positive definite, so CG still converges to its tolerance; the coarse correction is
+  /// only as good as that matrix is close to A (consecutive Newton matrices differ little). Without
+  /// a coarse level (coarseUsed() false), the same as updateFine().
+  void updateFineKeepingCoarse(const BlockSparseMatrix3f& A);
 
   double apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
 
