@@ -10,15 +10,16 @@
 #include <unordered_map>
 
 namespace repose {
-namespace {
 
-void checkIndices(const MeshVertices& V, const MeshTriangles& F) {
+void checkTriangleIndices(const MeshVertices& V, const MeshTriangles& F) {
   for (Eigen::Index t = 0; t < F.rows(); ++t)
     for (int c = 0; c < 3; ++c)
       if (F(t, c) < 0 || F(t, c) >= V.rows())
         throw std::invalid_argument("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(F(t, c)) +
                                     " of a mesh with " + std::to_string(V.rows()) + " vertices");
 }
+
+namespace {
 
 /// For each vertex, the index of the first vertex with the same coordinates.
 std::vector<int> weldExact(const MeshVertices& V) {
@@ -73,7 +74,7 @@ std::vector<int> triangleComponents(const MeshVertices& V, const MeshTriangles& 
 }  // namespace
 
 MeshTopology analyzeMeshTopology(const MeshVertices& V, const MeshTriangles& F) {
-  checkIndices(V, F);
+  checkTriangleIndices(V, F);
   MeshTopology r;
   r.vertices = std::size_t(V.rows());
   r.triangles = std::size_t(F.rows());
@@ -115,7 +116,7 @@ MeshTopology analyzeMeshTopology(const MeshVertices& V, const MeshTriangles& F) 
 }
 
 std::vector<TriangleMesh> splitConnectedComponents(const MeshVertices& V, const MeshTriangles& F) {
-  checkIndices(V, F);
+  checkTriangleIndices(V, F);
   std::size_t count = 0;
   const std::vector<int> comp = triangleComponents(V, F, count);
   std::vector<std::vector<Eigen::Index>> tris(count);

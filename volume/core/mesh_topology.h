@@ -28,6 +28,9 @@ struct MeshTopology {
   bool closed() const { return boundaryEdges == 0 && nonManifoldEdges == 0; }
 };
 
+/// Throws std::invalid_argument naming the first triangle whose vertex index is out of range.
+void checkTriangleIndices(const MeshVertices& V, const MeshTriangles& F);
+
 /// Edge and component statistics of a triangle soup. Coincident vertices (same coordinates) count
 /// as one, so a soup that repeats its vertices per triangle (STL) is analysed as a connected surface.
 /// Throws std::invalid_argument on an index out of range.
