@@ -301,7 +301,7 @@ LabelVoxelization voxelizeLabels(const std::vector<VoxelizePart>& parts, const I
     }
     try {
       checkMesh(p.V, p.F);
-      analyzeMeshTopology(p.V, p.F);
+      checkTriangleIndices(p.V, p.F);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(where(p) + ": " + e.what());
     }
