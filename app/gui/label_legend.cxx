@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <set>
+#include <vector>
 
 #include <QHeaderView>
 #include <QPixmap>
@@ -36,29 +37,29 @@ LabelLegend::LabelLegend(QWidget* parent) : QWidget(parent) {
 
 void LabelLegend::clear() { list_->clear(); }
 
-void LabelLegend::setCase(vtkPolyData* surfaces, const LabelTable& table, const std::vector<int>& boneLabels,
-                          const std::vector<int>& jointOfLabel, const std::vector<std::string>& jointNames) {
+void LabelLegend::setCase(vtkPolyData* surfaces, const LabelTable& table, const Skeleton& skeleton) {
   list_->clear();
   vtkDataArray* labels = surfaces ? surfaces->GetCellData()->GetArray("Label") : nullptr;
   if (!labels) return;
   std::set<int> values;
   for (vtkIdType c = 0; c < labels->GetNumberOfTuples(); ++c) values.insert(int(labels->GetTuple1(c)));
+  if (values.empty()) return;
+  const std::vector<int> jointOfLabel = boneOfLabel(skeleton, std::max(0, *values.rbegin()));
   for (int v : values) {
-    const bool bone = std::find(boneLabels.begin(), boneLabels.end(), v) != boneLabels.end();
+    const int joint = v >= 0 ? jointOfLabel[std::size_t(v)] : -1;
     double rgb[3];
-    labelColor(v, table, bone, rgb);
+    labelColor(v, table, joint >= 0, rgb);
     QPixmap swatch(14, 14);
     swatch.fill(QColor::fromRgbF(rgb[0], rgb[1], rgb[2]));
     const LabelInfo* info = table.find(v);
     const QString name = v < 0 ? QString("skin (body surface)")
                                : info ? QString::fromStdString(info->name) : QString("label %1").arg(v);
-    const int joint = v >= 0 && std::size_t(v) < jointOfLabel.size() ? jointOfLabel[std::size_t(v)] : -1;
     auto* item = new QTreeWidgetItem(list_);
     item->setIcon(0, QIcon(swatch));
     item->setText(0, name);
     item->setToolTip(0, name);
     item->setText(1, v < 0 ? QString() : QString::number(v));
-    item->setText(2, joint >= 0 ? QString::fromStdString(jointNames[std::size_t(joint)]) : QString());
+    item->setText(2, joint >= 0 ? QString::fromStdString(skeleton.joints[std::size_t(joint)].name) : QString());
     item->setData(0, Qt::UserRole, joint);
   }
 }

@@ -2,12 +2,11 @@
 // The legend of the 3D view: every structure of the case's surfaces with its colour, name (from the
 // case's label table, "label N" without one) and value; bones name their joint. Activating a bone's
 // entry selects its joint.
-#include <vector>
-
 #include <QStringList>
 #include <QWidget>
 
 #include "label_table.h"
+#include "skeleton.h"
 
 class QTreeWidget;
 class vtkPolyData;
@@ -18,10 +17,9 @@ class LabelLegend : public QWidget {
   Q_OBJECT
 public:
   explicit LabelLegend(QWidget* parent = nullptr);
-  /// Lists the labels of `surfaces` (cell data "Label"; -1 is the skin). `jointOfLabel(v)` names the
-  /// joint a bone label moves with (-1: none), `jointNames` their names.
-  void setCase(vtkPolyData* surfaces, const LabelTable& table, const std::vector<int>& boneLabels,
-               const std::vector<int>& jointOfLabel, const std::vector<std::string>& jointNames);
+  /// Lists the labels of `surfaces` (cell data "Label"; -1 is the skin), with the skeleton's joint
+  /// that each bone label moves with.
+  void setCase(vtkPolyData* surfaces, const LabelTable& table, const Skeleton& skeleton);
   void clear();
   /// "value<TAB>name" per entry, in the order shown (tests).
   QStringList entries() const;

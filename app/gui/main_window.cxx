@@ -543,13 +543,7 @@ void MainWindow::installCase(const OpenResult& result) {
   animation_->setSkeleton(skeleton);
   // The joint panel rebuilds on skeletonChanged, before this poses (rest) and renders.
   controller_.setSkeleton(skeleton);
-  const int maxBone = boneLabels_.empty() ? 0 : *std::max_element(boneLabels_.begin(), boneLabels_.end());
-  std::vector<int> jointOfLabel(std::size_t(maxBone + 1), -1);
-  for (std::size_t j = 0; j < skeleton.size(); ++j)
-    for (int l : skeleton.joints[j].labels) jointOfLabel[std::size_t(l)] = int(j);
-  std::vector<std::string> jointNames;
-  for (const Joint& j : skeleton.joints) jointNames.push_back(j.name);
-  legend_->setCase(pipeline_->restSurfaces(), table_, boneLabels_, jointOfLabel, jointNames);
+  legend_->setCase(pipeline_->restSurfaces(), table_, skeleton);
   slices_->clear();  // a new case: the views fit its grid and centre the cursor
   slices_->setVolumes(pipeline_->restLabels(), restImage_, table_, boneLabels_);
   slicesRoot_ = rootCentre();

@@ -291,7 +291,6 @@ void SceneView::setCase(vtkPolyData* rest, const Skeleton& skeleton, const Label
   resetCamera();
 }
 
-
 void SceneView::buildLod(vtkPolyData* rest, vtkLookupTable* lut, int maxLabel) {
   dropLod();
   // Above the threshold the interactive display uses a decimated copy (software OpenGL draws about
