@@ -439,6 +439,16 @@ TEST(AutoRigRules, FragmentsOfASplitLabelGoToTheirOwnSide) {
   ASSERT_NE(crumb, std::size_t(-1));
   ph.labels.data[crumb] = phantom_label::FootLeft;
   ph.labels.data[farVoxel] = phantom_label::FootLeft;
+  // A crumb beside the right tibia's lowest voxel: it touches the tibia, but its own foot lies
+  // within reach, and the label says it is foot.
+  std::size_t ankleCrumb = std::size_t(-1);
+  for (int k = 0; k < g.dims[2] && ankleCrumb == std::size_t(-1); ++k)
+    for (int j = 0; j < g.dims[1] && ankleCrumb == std::size_t(-1); ++j)
+      for (int i = 0; i + 1 < g.dims[0] && ankleCrumb == std::size_t(-1); ++i)
+        if (ph.labels.at(i, j, k) == phantom_label::TibiaRight && ph.labels.at(i + 1, j, k) != phantom_label::TibiaRight)
+          ankleCrumb = g.linearIndex(i + 1, j, k);
+  ASSERT_NE(ankleCrumb, std::size_t(-1));
+  ph.labels.data[ankleCrumb] = phantom_label::FootLeft;
 
   const AutoRigResult r = autoRig(ph.labels, table);
   std::printf("%s", r.report.text().c_str());
@@ -451,6 +461,7 @@ TEST(AutoRigRules, FragmentsOfASplitLabelGoToTheirOwnSide) {
   EXPECT_EQ(jointNamed(r, "left_ankle")->labels, std::vector<int>{footLeft});
   for (std::size_t p : toes) EXPECT_EQ(r.labels.data[p], footRight) << "a right toe voxel";
   EXPECT_EQ(r.labels.data[crumb], tibiaRight);
+  EXPECT_EQ(r.labels.data[ankleCrumb], footRight);
   // Every voxel of the original right foot is under the right foot's value.
   for (std::size_t p = 0; p < g.voxelCount(); ++p)
     if (original.labels.data[p] == phantom_label::FootRight && ph.labels.data[p] == phantom_label::FootLeft) {
@@ -464,8 +475,8 @@ TEST(AutoRigRules, FragmentsOfASplitLabelGoToTheirOwnSide) {
   for (const Joint& j : r.skeleton.joints) EXPECT_FALSE(hasLabel(&j, unassigned));
   EXPECT_EQ(r.report.noiseComponents, 1u);
   EXPECT_EQ(r.report.noiseVoxels, 1u);
-  EXPECT_EQ(r.report.fragmentsReassigned, 2u);
-  EXPECT_EQ(r.report.fragmentVoxelsReassigned, toes.size() + 1);
+  EXPECT_EQ(r.report.fragmentsReassigned, 3u);
+  EXPECT_EQ(r.report.fragmentVoxelsReassigned, toes.size() + 2);
   const std::string text = r.report.text();
   EXPECT_NE(text.find("-> foot_right (label " + std::to_string(footRight) + "): nearest foot on its side"),
             std::string::npos);

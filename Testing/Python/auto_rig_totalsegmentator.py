@@ -2,7 +2,7 @@
 1. The filter with the built-in class names: hips (femoral head centres) and the lumbosacral joint,
    rooted at the pelvis (hip bones + sacrum + S1); ribs ride with the thoracic vertebrae (never
    joints); the femurs are reported as cut by the field of view; the scan's 11 loose crumbs of bone
-   label (17 voxels) each go to the bone they touch.
+   label (17 voxels) each stay with their own bone, which lies within reach.
 2. The same scan with both femurs under one label and both hip bones under another, and a slice of
    the right femur cut out: the femur label splits by side, the cut-off piece goes to the right femur,
    not to the label's first value (the left femur) nor to a joint of its own, and the hip label (one
@@ -82,21 +82,13 @@ for femur in ("femur_left", "femur_right"):
     line = next((l for l in report.splitlines() if l.strip().startswith(femur + " ")), "")
     check("cut by the field of view" in line, f"{femur} reported as cut by the field of view: '{line.strip()}'", failures)
 check("missing bones" in report and "skull" in report, "missing bones (skull, ...) are reported", failures)
-# The scan's crumbs: 11 pieces (17 voxels) of bone labels apart from their bone, each touching one.
-changed = np.flatnonzero(out != source)
+# The scan's crumbs: 11 pieces (17 voxels) of bone labels apart from their bone; each lies within
+# reach of its own bone (a sacrum crumb touching S1 stays sacrum), so no voxel changes label.
 check(rig.GetNumberOfReassignedFragments() == 11 and rig.GetReassignedFragmentVoxels() == 17
       and rig.GetUnassignedFragmentVoxels() == 0,
       f"11 fragments (17 voxels) given to bones, none left over ({rig.GetNumberOfReassignedFragments()}, "
       f"{rig.GetReassignedFragmentVoxels()}, {rig.GetUnassignedFragmentVoxels()})", failures)
-dims = reader.GetOutput().GetDimensions()
-vol_in, vol_out = source.reshape(dims[2], dims[1], dims[0]), out.reshape(dims[2], dims[1], dims[0])
-touching = 0
-for p in changed:
-    k, j, i = np.unravel_index(p, vol_in.shape)
-    block = vol_in[max(k - 1, 0):k + 2, max(j - 1, 0):j + 2, max(i - 1, 0):i + 2]
-    touching += vol_out.flat[p] in block
-check(len(changed) <= 17 and touching == len(changed),
-      f"{len(changed)} voxels changed label, each to a bone it touches", failures)
+check(np.array_equal(out, source), "each crumb stays with its own bone: the output labels equal the input", failures)
 
 # ---- 2. both femurs in one label, both hip bones in another, a slice cut out of the right femur
 img = Image(path)
@@ -152,8 +144,8 @@ code, stdout, _ = run("rig", "--labels", path, "--out", f"{work}/rig/skeleton.js
 print(stdout)
 print(f"repose rig: {time.perf_counter() - t:.2f} s")
 check(stdout.startswith("label table: built-in TotalSegmentator names"), "rig says which table it used", failures)
-check(os.path.isfile(f"{work}/rig/labels_rigged.nii.gz") and os.path.isfile(f"{work}/rig/labels_rigged.tsv"),
-      "rig writes the relabelled volume and its table beside the skeleton", failures)
+check(not os.path.exists(f"{work}/rig/labels_rigged.nii.gz"),
+      "nothing relabelled: the skeleton refers to the scan's own labels", failures)
 check(sorted(j["name"] for j in load_json(f"{work}/rig/skeleton.json")["joints"]) == sorted(joints),
       "the CLI finds the filter's joints", failures)
 t = time.perf_counter()

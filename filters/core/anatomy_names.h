@@ -14,7 +14,7 @@
 //   head               the skull, when a neck joint lies below it
 //   jaw                the mandible (child of the skull's joint)
 //   vertebra_<level>   every other vertebra labelled on its own: vertebra_C1 ... vertebra_L5
-//   LEFT/RIGHT clavicle  the clavicle (child of the trunk)
+//   LEFT/RIGHT clavicle  the clavicle (child of the joint carrying the sternum, else the trunk)
 //   LEFT/RIGHT scapula   the scapula (child of its clavicle, else of the trunk)
 //   LEFT/RIGHT shoulder  the humerus (child of its scapula, else of the trunk)
 //   LEFT/RIGHT elbow     the forearm: radius and ulna together
@@ -22,6 +22,8 @@
 //   LEFT/RIGHT hip       the femur, with its patella (see below)
 //   LEFT/RIGHT knee      the shank: tibia and fibula together
 //   LEFT/RIGHT ankle     the foot: tarsals, metatarsals, phalanges
+// A bone whose name is not recognised keeps its label name as its joint's name. Names are made
+// unique with _2, _3 (two bones of one kind and side, as a hand whose fingers lie apart).
 // Ribs, sternum and costal cartilage (when labelled as bone) ride with the thoracic vertebra (or
 // spine) they articulate with; they are never joints, and never parents of the neck or the head.
 // The patella rides with its femur: it sits in the femoral trochlea, no motion format drives a
@@ -94,10 +96,11 @@ std::string mirrorJointName(const std::string& name);
 /// The joint name of a bone of this type and side when it is the bone's own joint (femur ->
 /// hip, tibia and fibula -> knee, foot bones -> ankle, humerus -> shoulder, radius/ulna/forearm ->
 /// elbow, hand bones -> wrist, clavicle, scapula, mandible -> jaw, vertebra -> vertebra_<level>,
-/// skull -> neck, spine regions -> spine/chest/neck). Context-dependent renames (the vertebra on
-/// the pelvis -> spine, the lowest cervical joint -> neck, the skull above a neck -> head) are
-/// the rig's. "" for bones that are never joints of their own (ribs, sternum, patella, pelvis
-/// bones) and for sided bones without a side.
+/// skull -> neck, spine regions -> spine/chest/neck, hip bones, sacrum, coccyx, S vertebrae ->
+/// pelvis). Context-dependent renames (the vertebra on the pelvis -> spine, the lowest cervical
+/// joint -> neck, the skull above a neck -> head) are the rig's. "" for bones that are never
+/// joints of their own (ribs, sternum, costal cartilage, patella), for paired bones without a
+/// side, and for names it does not know.
 std::string jointNameOf(BoneType type, BoneSide side, const std::string& level = "");
 
 /// The joint name autoRig gives a bone named `labelName` on its own ("" when the name is not

@@ -227,16 +227,16 @@ void chooseBones(const ImageGrid& grid, const LabelTable& table, const AutoRigOp
       b.hi = c.hi;
       b.cut = c.cut;
       out.boneOfComponent[chosen[r]] = int(out.bones.size());
-      if (chosen.size() > 1) {
-        const LabelInfo info{b.value, b.name, LabelKind::Bone};
+      if (chosen.size() > 1) {  // the split bones' names, in the source label's colour
+        const LabelInfo* source = table.find(label);
+        LabelInfo info = source ? *source : LabelInfo{};
+        info.value = b.value;
+        info.name = b.name;
+        info.kind = LabelKind::Bone;
         auto it = std::find_if(out.table.labels.begin(), out.table.labels.end(),
                                [&](const LabelInfo& l) { return l.value == b.value; });
-        if (it != out.table.labels.end()) {
-          it->name = b.name;  // keeps the entry's colour
-          it->kind = LabelKind::Bone;
-        } else {
-          out.table.labels.push_back(info);
-        }
+        if (it != out.table.labels.end()) *it = info;
+        else out.table.labels.push_back(info);
       }
       out.bones.push_back(std::move(b));
     }

@@ -45,9 +45,11 @@ public:
   void run() {
     collect();
     if (rb_.fragments.empty()) return;
+    // Its own kind first (touching, then near), so a piece of a hip bone that touches the femoral
+    // head stays with its hip bone; then any bone it touches, then the nearest on its side.
     while (true) {
-      propagateTouches();
-      if (!placeNearest()) break;
+      if (propagateTouches(2) | placeNearest(2)) continue;
+      if (!(propagateTouches(0) | placeNearest(1))) break;
     }
     leaveTheRestSoft();
   }
@@ -86,8 +88,9 @@ private:
     Piece& piece = pieces_[f];
     const BoneFragment& frag = rb_.fragments[f];
     piece.kind = recogniseBone(rb_.table.nameOf(frag.label));
+    // Its side: where it lies, or near the midline the side its label names (if any).
     const double dx = frag.centroid.x() - rb_.midX;
-    piece.side = std::abs(dx) <= band_ ? BoneSide::None : dx > 0 ? BoneSide::Left : BoneSide::Right;
+    piece.side = std::abs(dx) <= band_ ? piece.kind.side : dx > 0 ? BoneSide::Left : BoneSide::Right;
     std::vector<V3> surface;
     const int nx = grid_.dims[0], ny = grid_.dims[1];
     for (std::size_t p : piece.voxels) {
@@ -113,7 +116,8 @@ private:
   bool sameKind(int f, int bone) const {
     const Piece& piece = pieces_[f];
     const RigBone& b = rb_.bones[bone];
-    return piece.kind.known() ? b.anatomy.type == piece.kind.type : b.sourceLabel == rb_.fragments[f].label;
+    if (!piece.kind.known()) return b.sourceLabel == rb_.fragments[f].label;
+    return b.anatomy.type == piece.kind.type && b.anatomy.level == piece.kind.level;  // L3 is not L2
   }
 
   // Preference of bone `bone` for fragment f: own kind on a compatible side, compatible side, any.
@@ -137,7 +141,10 @@ private:
     }
   }
 
-  void propagateTouches() {
+  // Fragments touching a bone of rank >= minRank (through placed fragments) go to it, repeated
+  // until nothing moves; returns whether any did.
+  bool propagateTouches(int minRank) {
+    bool any = false;
     for (bool changed = true; changed;) {
       changed = false;
       for (int f = 0; f < int(pieces_.size()); ++f) {
@@ -147,6 +154,7 @@ private:
           const int bone = rb_.boneOfComponent[c];
           if (bone < 0) continue;
           const int r = rank(f, bone);
+          if (r < minRank) continue;
           if (r > bestRank || (r == bestRank && count > bestCount)) {
             best = bone;
             bestRank = r;
@@ -155,10 +163,11 @@ private:
         }
         if (best >= 0) {
           place(f, best, "touches " + rb_.bones[best].name, 0);
-          changed = true;
+          changed = any = true;
         }
       }
     }
+    return any;
   }
 
   // Distance from fragment f to every bone (through placed fragments too) within the limit.
@@ -176,8 +185,9 @@ private:
     return d;
   }
 
-  // One round: every unplaced fragment goes to its best bone within reach of what is placed now.
-  bool placeNearest() {
+  // One round: every unplaced fragment goes to its best bone of rank >= minRank (1: a compatible
+  // side; 2: also its own kind) within reach of what is placed now.
+  bool placeNearest(int minRank) {
     std::vector<int> open;
     for (int f = 0; f < int(pieces_.size()); ++f)
       if (rb_.fragments[f].bone < 0) open.push_back(f);
@@ -189,6 +199,7 @@ private:
         double bestD = 0;
         for (const auto& [bone, d] : distances(f)) {
           const int r = rank(f, bone);
+          if (r < minRank) continue;
           if (r > bestRank || (r == bestRank && r > 0 && d < bestD)) {
             best = bone;
             bestRank = r;

@@ -7,15 +7,19 @@
 
 namespace repose {
 
-/// Gives every component that chooseBones left out (needs findBoneBoundaries) to a bone:
-/// 1. the bone it touches (26-neighbours; through fragments already placed): of several, its own
-///    kind on a compatible side first, then a compatible side, then the largest contact;
-/// 2. else the nearest bone on its side of the mid-sagittal plane (fragments within
-///    options.midlineBandMm of it, and midline bones, fit either side), its own kind first, within
-///    the fragment distance (AutoRigOptions::maxFragmentDistanceMm / ...Voxels);
-/// 3. else it is left as soft tissue: it gets the value of a new soft label
+/// Gives every component that chooseBones left out (needs findBoneBoundaries) to a bone, its own
+/// kind first because the label says what bone it is (a piece of a hip bone that touches the
+/// femoral head stays with the hip bone):
+/// 1. a bone of its own kind on a compatible side that it touches (26-neighbours, through pieces
+///    already placed), else the nearest one within the fragment distance
+///    (AutoRigOptions::maxFragmentDistanceMm / ...Voxels);
+/// 2. else any bone it touches (a compatible side first, then the largest contact);
+/// 3. else the nearest bone on its side within the fragment distance;
+/// 4. else it is left as soft tissue: it gets the value of a new soft label
 ///    "unassigned_bone_fragments" (added to out.table; out.unassignedValue).
-/// Steps 1 and 2 repeat until nothing moves, so a chain of fragments follows the bone it hangs on.
+/// Sides: a fragment lies on the side of the mid-sagittal plane where its centroid is, or, within
+/// options.midlineBandMm of it, on the side its label names (none: either side); midline bones fit
+/// either side. The steps repeat until nothing moves, so a chain of pieces follows its bone.
 /// Fills out.fragments (each with its bone and why) and adds them to their bone (RigBone::voxels,
 /// lo, hi; call findBoneBoundaries again to include them in its surface).
 void assignFragments(const LabelVolume& labels, const AutoRigOptions& options, RigBones& out);

@@ -37,9 +37,10 @@ struct AutoRigOptions {
   int minComponentVoxels = 8;
   double minBoneFraction = 0.25;
   double minBoneVolumeMm3 = 500.0;
-  /// A fragment that touches no bone goes to the nearest bone on its side of the mid-sagittal
-  /// plane (its own kind first) when that lies within this distance (mm, voxel centres) or this
-  /// many voxels of the largest spacing, whichever is larger; farther, it is left as soft tissue.
+  /// A fragment goes to a bone of its own kind it touches or that lies within this distance (mm,
+  /// voxel centres) or this many voxels of the largest spacing, whichever is larger; else to a bone
+  /// it touches, else to the nearest on its side within that distance; else it is left as soft
+  /// tissue (see assignFragments).
   double maxFragmentDistanceMm = 20.0;
   double maxFragmentDistanceVoxels = 3.0;
   /// Fragments within this distance (mm) of the mid-sagittal plane belong to neither side.
