@@ -159,9 +159,9 @@ const char* kRigUsage =
     "  written beside the skeleton (labels_rigged.nii.gz, labels_rigged.tsv).\n"
     "  --label-table FILE  value<TAB>name[<TAB>bone|soft|background] lines, or a 3D Slicer colour table\n"
     "                      (.ctbl/.txt: value name R G B A). Default: the table beside the labels (NAME.tsv,\n"
-    "                      NAME.ctbl, NAME_ColorTable.ctbl, NAME.txt, labels.tsv for NAME.nii.gz), else\n"
-    "                      TotalSegmentator's class names. A table whose bone names contradict where the\n"
-    "                      bones lie (the wrong table) is an error\n"
+    "                      NAME.ctbl, NAME_ColorTable.ctbl, NAME.txt unless it holds no table, labels.tsv for\n"
+    "                      NAME.nii.gz), else TotalSegmentator's class names. A table whose bone names\n"
+    "                      contradict where the bones lie (the wrong table) is an error\n"
     "  --max-gap MM        largest gap between bones that still makes a joint (default 6)\n";
 
 const char* kPrepareUsage =
@@ -325,24 +325,50 @@ struct LabelTableChoice {
   std::string origin;  // for the console
 };
 
-LabelTableChoice chooseLabelTable(const std::string& labelsPath, const Options& o) {
+LabelTableChoice builtinLabelTable(const std::string& labelsPath) {
   LabelTableChoice c;
-  c.path = o.get("label-table");
-  const bool beside = c.path.empty();
-  if (beside) c.path = repose::findLabelTableBeside(labelsPath);
-  if (c.path.empty()) {
-    c.table = repose::builtinTotalSegmentatorTable();
-    c.origin = "built-in TotalSegmentator names (no --label-table given, none found beside " + labelsPath + ")";
-    return c;
-  }
-  c.text = repose::readTextFile(c.path);
+  c.table = repose::builtinTotalSegmentatorTable();
+  c.origin = "built-in TotalSegmentator names (no --label-table given, none found beside " + labelsPath + ")";
+  return c;
+}
+
+/// Reads a label table; a file that holds none is an error naming it.
+repose::LabelTable readLabelTable(const std::string& path, const std::string& text) {
+  repose::LabelTable table;
   try {
-    c.table = repose::parseLabelTable(c.text, c.path);
+    table = repose::parseLabelTable(text, path);
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }
-  c.origin = c.path + (beside ? " (found beside " + labelsPath + ")" : "");
-  return c;
+  if (table.labels.empty())
+    throw std::runtime_error(path + ": holds no labels (expected value<TAB>name[<TAB>kind] or value name R G B A lines)");
+  return table;
+}
+
+LabelTableChoice chooseLabelTable(const std::string& labelsPath, const Options& o) {
+  LabelTableChoice c;
+  if (o.has("label-table")) {
+    c.path = o.get("label-table");
+    c.text = repose::readTextFile(c.path);
+    c.table = readLabelTable(c.path, c.text);
+    c.origin = c.path;
+    return c;
+  }
+  for (const std::string& path : repose::labelTablesBeside(labelsPath)) {
+    c.path = path;
+    c.text = repose::readTextFile(path);
+    try {
+      c.table = readLabelTable(path, c.text);
+    } catch (const std::runtime_error& e) {
+      // NAME.txt beside the volume may be notes rather than a Slicer colour table: not an error.
+      if (repose::imageExtension(path) != ".txt") throw;
+      std::cout << "label table: ignoring " << path << " (" << e.what() << ")" << std::endl;
+      continue;
+    }
+    c.origin = path + " (found beside " + labelsPath + ")";
+    return c;
+  }
+  return builtinLabelTable(labelsPath);
 }
 
 /// A table whose bone names contradict where the bones lie is the wrong table: say so, naming it.

@@ -133,6 +133,10 @@ TEST(LabelTable, FoundBesideTheVolume) {
   EXPECT_EQ(findLabelTableBeside(volume), (dir / "seg.tsv").string());
   EXPECT_EQ(findLabelTableBeside((dir / "seg.nrrd").string()), (dir / "seg.tsv").string());
   EXPECT_EQ(findLabelTableBeside((dir / "labels.mha").string()), (dir / "labels.tsv").string());
+  const std::vector<std::string> all = labelTablesBeside(volume);
+  ASSERT_EQ(all.size(), 5u);
+  EXPECT_EQ(all[3], (dir / "seg.txt").string());
+  EXPECT_EQ(all[4], (dir / "labels.tsv").string());
   fs::remove_all(dir);
 }
 

@@ -53,6 +53,17 @@ check(code == 1 and err.startswith(f"repose: error: {work}/alone/labels.nii.gz: 
       "no table beside the phantom: the built-in names are refused, saying why", failures)
 check(not os.path.exists(f"{work}/alone/skeleton.json"), "no skeleton written", failures)
 
+# ---- notes in NAME.txt beside the volume are not a table: skipped for the next one (labels.tsv)
+os.makedirs(f"{work}/notes")
+shutil.copy(f"{work}/ph/labels.nii.gz", f"{work}/notes/seg.nii.gz")
+shutil.copy(f"{work}/ph/labels.tsv", f"{work}/notes/labels.tsv")
+with open(f"{work}/notes/seg.txt", "w") as f:
+    f.write("Phantom written by repose phantom, tiny size\n")
+code, out, _ = run("rig", "--labels", f"{work}/notes/seg.nii.gz", "--out", f"{work}/notes/skeleton.json")
+check(out.startswith(f"label table: ignoring {work}/notes/seg.txt") and
+      f"label table: {work}/notes/labels.tsv (found beside" in out and joints_of(f"{work}/notes/skeleton.json") == truth,
+      "notes in seg.txt are skipped, labels.tsv beside is read", failures)
+
 # ---- a Slicer colour table beside the volume, in other spellings
 spellings = {"skull": "Cranium", "spine": "Spine", "ribcage": "Rib_cage", "pelvis": "Pelvis",
              "femur_left": "Femur_L", "femur_right": "Femur_R", "tibia_left": "Left_Tibia",

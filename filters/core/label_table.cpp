@@ -211,7 +211,7 @@ std::string labelTableToTsv(const LabelTable& table) {
   return out.str();
 }
 
-std::string findLabelTableBeside(const std::string& volumePath) {
+std::vector<std::string> labelTablesBeside(const std::string& volumePath) {
   namespace fs = std::filesystem;
   const fs::path p(volumePath);
   std::string name = p.filename().string();
@@ -223,14 +223,20 @@ std::string findLabelTableBeside(const std::string& volumePath) {
       break;
     }
   }
-  const fs::path dir = p.parent_path();
+  std::vector<std::string> found;
   for (const std::string& candidate : {name + ".tsv", name + ".ctbl", name + "_ColorTable.ctbl", name + ".txt",
-                                      std::string("labels.tsv")}) {
+                                       std::string("labels.tsv")}) {
     std::error_code ec;
-    const fs::path c = dir / candidate;
-    if (fs::is_regular_file(c, ec)) return c.string();
+    const fs::path c = p.parent_path() / candidate;
+    if (fs::is_regular_file(c, ec) && std::find(found.begin(), found.end(), c.string()) == found.end())
+      found.push_back(c.string());
   }
-  return "";
+  return found;
+}
+
+std::string findLabelTableBeside(const std::string& volumePath) {
+  const std::vector<std::string> found = labelTablesBeside(volumePath);
+  return found.empty() ? std::string() : found.front();
 }
 
 LabelTable genericLabelTable(const std::vector<int>& values, const std::vector<int>& boneValues) {

@@ -55,9 +55,11 @@ LabelTable readLabelTableFile(const std::string& path);
 /// some label has a colour (parseLabelTable reads it back).
 std::string labelTableToTsv(const LabelTable& table);
 
-/// The label table stored beside a label volume, or "" when there is none: for DIR/NAME.nii.gz
-/// (or .nii, .nrrd, .nhdr, .mha, .mhd) the first existing of DIR/NAME.tsv, DIR/NAME.ctbl,
-/// DIR/NAME_ColorTable.ctbl (3D Slicer's export), DIR/NAME.txt and DIR/labels.tsv.
+/// The label tables stored beside a label volume, most specific first: for DIR/NAME.nii.gz (or
+/// .nii, .nrrd, .nhdr, .mha, .mhd) those of DIR/NAME.tsv, DIR/NAME.ctbl, DIR/NAME_ColorTable.ctbl
+/// (3D Slicer's export), DIR/NAME.txt and DIR/labels.tsv that exist.
+std::vector<std::string> labelTablesBeside(const std::string& volumePath);
+/// The first of labelTablesBeside(), or "" when there is none.
 std::string findLabelTableBeside(const std::string& volumePath);
 
 /// A table for a volume that came without one: every value of `values` (0 excepted) named
