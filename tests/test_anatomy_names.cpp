@@ -142,18 +142,23 @@ TEST(AnatomyNames, JointNamesKeepThePhantomsAndTheRigsNames) {
 
 TEST(AnatomyNames, Vocabulary) {
   std::set<std::string> names;
-  int limbs = 0;
+  int limbs = 0, girdles = 0;
   for (const StandardJoint& j : standardJoints()) {
     EXPECT_TRUE(names.insert(j.name).second) << j.name;
     EXPECT_TRUE(isStandardJointName(j.name));
-    EXPECT_EQ(isLimbJoint(j.name), j.limb);
-    limbs += j.limb;
-    if (j.limb) {
-      EXPECT_TRUE(isLimbJoint(mirrorJointName(j.name))) << j.name;
+    EXPECT_EQ(isLimbJoint(j.name), j.region == JointRegion::Limb);
+    EXPECT_EQ(isGirdleJoint(j.name), j.region == JointRegion::Girdle);
+    limbs += j.region == JointRegion::Limb;
+    girdles += j.region == JointRegion::Girdle;
+    if (j.region != JointRegion::Trunk) {
+      EXPECT_EQ(int(jointSide(j.name)) != int(S::None), true) << j.name;
+      EXPECT_TRUE(names.count(mirrorJointName(j.name)) || isStandardJointName(mirrorJointName(j.name))) << j.name;
       EXPECT_NE(mirrorJointName(j.name), j.name);
     }
   }
-  EXPECT_EQ(limbs, 16);
+  EXPECT_EQ(limbs, 12);
+  EXPECT_EQ(girdles, 4);
+  EXPECT_EQ(names.size(), 22u);
   for (const char* n : {"pelvis", "spine", "chest", "neck", "head", "jaw", "left_hip", "right_knee", "left_ankle",
                         "right_shoulder", "left_elbow", "right_wrist", "left_scapula", "right_clavicle",
                         "vertebra_L4", "vertebra_C1", "vertebra_T12", "vertebra_S1"})
@@ -161,6 +166,8 @@ TEST(AnatomyNames, Vocabulary) {
   for (const char* n : {"vertebra_L6", "vertebra_C8", "vertebra_l4", "left_patella", "hip", "femur_left", ""})
     EXPECT_FALSE(isStandardJointName(n)) << n;
   EXPECT_TRUE(isLimbJoint("left_knee"));
+  EXPECT_FALSE(isLimbJoint("left_scapula"));
+  EXPECT_TRUE(isGirdleJoint("right_clavicle"));
   EXPECT_FALSE(isLimbJoint("spine"));
   EXPECT_FALSE(isLimbJoint("vertebra_L4"));
   EXPECT_EQ(mirrorJointName("left_knee"), "right_knee");

@@ -237,21 +237,23 @@ bool isMidlineBone(BoneType t) {
 bool isPairedBone(BoneType t) { return t != BoneType::Unknown && !isMidlineBone(t); }
 
 const std::vector<StandardJoint>& standardJoints() {
+  using R = JointRegion;
   static const std::vector<StandardJoint> joints = {
-      {"pelvis", "hip bones, sacrum and coccyx (the root)", false},
-      {"spine", "the lowest vertebra (or spine label) above the pelvis", false},
-      {"chest", "a thoracic spine labelled as one bone", false},
-      {"neck", "the lowest cervical vertebra (or cervical spine); the skull when no cervical bone is below it", false},
-      {"head", "the skull, above a neck joint", false},
-      {"jaw", "the mandible", false},
-      {"left_clavicle", "clavicle", true},     {"left_scapula", "scapula", true},
-      {"left_shoulder", "humerus", true},      {"left_elbow", "radius and ulna", true},
-      {"left_wrist", "hand bones", true},      {"left_hip", "femur and patella", true},
-      {"left_knee", "tibia and fibula", true}, {"left_ankle", "foot bones", true},
-      {"right_clavicle", "clavicle", true},    {"right_scapula", "scapula", true},
-      {"right_shoulder", "humerus", true},     {"right_elbow", "radius and ulna", true},
-      {"right_wrist", "hand bones", true},     {"right_hip", "femur and patella", true},
-      {"right_knee", "tibia and fibula", true}, {"right_ankle", "foot bones", true},
+      {"pelvis", "hip bones, sacrum and coccyx (the root)", R::Trunk},
+      {"spine", "the lowest vertebra (or spine label) above the pelvis", R::Trunk},
+      {"chest", "a thoracic spine labelled as one bone", R::Trunk},
+      {"neck", "the lowest cervical vertebra (or cervical spine); the skull when no cervical bone is below it",
+       R::Trunk},
+      {"head", "the skull, above a neck joint", R::Trunk},
+      {"jaw", "the mandible", R::Trunk},
+      {"left_clavicle", "clavicle", R::Girdle},      {"left_scapula", "scapula", R::Girdle},
+      {"right_clavicle", "clavicle", R::Girdle},     {"right_scapula", "scapula", R::Girdle},
+      {"left_shoulder", "humerus", R::Limb},         {"left_elbow", "radius and ulna", R::Limb},
+      {"left_wrist", "hand bones", R::Limb},         {"left_hip", "femur and patella", R::Limb},
+      {"left_knee", "tibia and fibula", R::Limb},    {"left_ankle", "foot bones", R::Limb},
+      {"right_shoulder", "humerus", R::Limb},        {"right_elbow", "radius and ulna", R::Limb},
+      {"right_wrist", "hand bones", R::Limb},        {"right_hip", "femur and patella", R::Limb},
+      {"right_knee", "tibia and fibula", R::Limb},   {"right_ankle", "foot bones", R::Limb},
   };
   return joints;
 }
@@ -267,11 +269,16 @@ bool isStandardJointName(const std::string& name) {
   return levelOf(level) == name.substr(prefix.size());
 }
 
-bool isLimbJoint(const std::string& name) {
+namespace {
+bool inRegion(const std::string& name, JointRegion region) {
   for (const StandardJoint& j : standardJoints())
-    if (name == j.name) return j.limb;
+    if (name == j.name) return j.region == region;
   return false;
 }
+}  // namespace
+
+bool isLimbJoint(const std::string& name) { return inRegion(name, JointRegion::Limb); }
+bool isGirdleJoint(const std::string& name) { return inRegion(name, JointRegion::Girdle); }
 
 BoneSide jointSide(const std::string& name) {
   if (name.compare(0, 5, "left_") == 0) return BoneSide::Left;

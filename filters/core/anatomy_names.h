@@ -76,18 +76,25 @@ bool isMidlineBone(BoneType type);
 /// Bones of which a body has one per side (limbs, girdles, hip bones, ribs).
 bool isPairedBone(BoneType type);
 
+/// Trunk: pelvis, spine, chest, neck, head, jaw, vertebrae. Girdle: clavicle and scapula (motion
+/// formats seldom drive them). Limb: hip, knee, ankle, shoulder, elbow, wrist.
+enum class JointRegion { Trunk, Girdle, Limb };
+
 /// The vocabulary: one entry per name (vertebrae as the pattern "vertebra_<level>").
 struct StandardJoint {
   const char* name;     ///< "left_knee"
   const char* rotates;  ///< "tibia and fibula": the bones the joint moves (for help texts)
-  bool limb;            ///< a joint of a limb or a limb girdle (hip, knee, ankle, shoulder, ...)
+  JointRegion region;
 };
-/// Every joint name of the vocabulary, trunk first, then left and right limbs.
+/// Every joint name of the vocabulary, trunk first, then left and right girdles and limbs.
 const std::vector<StandardJoint>& standardJoints();
 /// True for the names of standardJoints() and for vertebra_C1 ... vertebra_S5.
 bool isStandardJointName(const std::string& name);
-/// True for left_/right_ hip, knee, ankle, shoulder, elbow, wrist, scapula, clavicle.
+/// True for left_/right_ hip, knee, ankle, shoulder, elbow, wrist: the joints a motion clip is
+/// expected to drive.
 bool isLimbJoint(const std::string& name);
+/// True for left_/right_ clavicle and scapula.
+bool isGirdleJoint(const std::string& name);
 /// The side of a joint name: Left for "left_...", Right for "right_...", else None.
 BoneSide jointSide(const std::string& name);
 /// "left_knee" <-> "right_knee"; other names unchanged.
