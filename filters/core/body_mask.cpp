@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "distance_transform.h"
 #include "parallel_for.h"
 
 namespace repose {
@@ -137,6 +138,26 @@ void fillHoles3d(std::vector<std::uint8_t>& v, const std::array<int, 3>& d) {
   for (auto& x : v) x = (x == kOutside) ? 0 : 1;
 }
 
+// Opening of the CT part by a ball of radius r (mm) keeps the body and drops what is thinner than
+// 2r (the table's shell, a cushion, cables); the largest piece of the opened mask and the labels is
+// then grown back by r within the original mask, so the body's own surface is unchanged.
+void removeThinStructures(MaskVolume& mask, const LabelVolume& labels, double r) {
+  const std::size_t n = mask.data.size();
+  MaskVolume outside = mask;
+  for (auto& x : outside.data) x = x ? 0 : 1;
+  const std::vector<float> toOutside = distanceToFeatures(outside);
+  MaskVolume core = mask;  // eroded
+  for (std::size_t p = 0; p < n; ++p) core.data[p] = toOutside[p] > r ? 1 : 0;
+  const std::vector<float> toCore = distanceToFeatures(core);
+  MaskVolume opened = mask;
+  for (std::size_t p = 0; p < n; ++p) opened.data[p] = (toCore[p] <= r && mask.data[p]) || labels.data[p] != 0;
+  keepLargestComponent(opened.data, opened.grid.dims);
+  const std::vector<float> toOpened = distanceToFeatures(opened);
+  const double grow = r + opened.grid.spacing.maxCoeff();
+  for (std::size_t p = 0; p < n; ++p)
+    mask.data[p] = (mask.data[p] && toOpened[p] <= grow) || labels.data[p] != 0 ? 1 : 0;
+}
+
 }  // namespace
 
 MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, const BodyMaskOptions& options) {
@@ -156,6 +177,7 @@ MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, con
     for (std::size_t p = b; p < e; ++p)
       mask.data[p] = (labels.data[p] != 0 || (image && image->data[p] > threshold)) ? 1 : 0;
   }, 1 << 16);
+  if (image && options.thinStructureMm > 0) removeThinStructures(mask, labels, options.thinStructureMm);
 
   const auto& d = mask.grid.dims;
   if (options.keepLargestComponent) keepLargestComponent(mask.data, d);

@@ -9,11 +9,16 @@ namespace repose {
 
 struct BodyMaskOptions {
   double bodyThreshold = -500.0;  ///< HU; CT voxels above it count as body
+  /// mm: CT structures thinner than twice this (the table, its cushion, blankets, cables) are no
+  /// body even where they touch it: the CT part is opened with a ball of this radius before its
+  /// largest component is taken, then grown back within the CT by the same radius. 0 = off.
+  double thinStructureMm = 5.0;
   bool fillHoles = true;          ///< fill cavities (slice by slice along k and in 3-D)
   bool keepLargestComponent = true;
 };
 
-/// mask = labels != 0 (∪ image > threshold), holes filled, largest 6-connected component kept.
+/// mask = labels != 0 (∪ CT above the threshold, without the table), holes filled, largest
+/// 6-connected component kept.
 /// Throws std::invalid_argument when the image is on a different grid or the mask is empty.
 MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, const BodyMaskOptions& options);
 
