@@ -38,6 +38,7 @@
 #include "mesh_posing.h"
 #include "ReposeImageConversion.h"
 #include "vdb_volume_writer.h"
+#include "repose_version.h"
 #include "bvh.h"
 #include "pvd_series.h"
 #include "retarget.h"
@@ -869,6 +870,7 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string command = argv[1];
+  if (command == "--version") return std::cout << "repose " << REPOSE_VERSION << "\n", 0;
   try {
     const std::set<std::string> none;
     if (command == "demo")

@@ -36,17 +36,21 @@ namespace repose {
 const char* kVoxelizeUsage =
     "usage: repose voxelize --skin MESH --bone NAME=MESH ... [--tissue NAME=MESH ...] [--bones-split PREFIX=MESH ...]\n"
     "                       --voxel MM --out labels.nii.gz [--skeleton-out skeleton.json] [options]\n"
-    "  Turns closed surfaces (.obj, .stl, .ply, .vtp, .vtk) into one label volume with OpenVDB level sets: the\n"
-    "  skin's interior is soft tissue (label 1), each bone gets its own label (2, 3, ... in the order given),\n"
-    "  then each tissue; bones win over tissues over skin. The label table is written beside the output\n"
-    "  (labels.nii.gz -> labels.tsv, as 'repose prepare --label-table' reads it). The grid is axis-aligned\n"
-    "  (LPS, identity direction) with cubic voxels, fitted to the skin's bounds. Mesh coordinates are taken\n"
-    "  as LPS millimetres (scaled by --unit-mm). Holes of about a voxel are bridged; a surface whose holes let\n"
-    "  the outside in is an error; bones partly outside the skin are kept and reported.\n"
+    "  Turns surfaces (.obj, .stl, .ply, .vtp, .vtk) into one label volume: the skin's interior is soft tissue\n"
+    "  (label 1), each bone gets its own label (2, 3, ... in the order given), then each tissue; bones win over\n"
+    "  tissues over skin. The label table is written beside the output (labels.nii.gz -> labels.tsv, as\n"
+    "  'repose prepare --label-table' reads it). The grid is axis-aligned (LPS, identity direction) with cubic\n"
+    "  voxels, fitted to the skin's bounds. Mesh coordinates are taken as LPS millimetres (scaled by --unit-mm).\n"
+    "  Surfaces are taken as they come: a voxel is inside where the surface's generalized winding number is at\n"
+    "  least 1/2, so holes are spanned, overlapping pieces (a hip bone's ilium, ischium and pubis) are united,\n"
+    "  inward pieces inside others (a skull's inner table) are carved out and inside-out surfaces turned; each\n"
+    "  part's line says what was repaired. A surface too open to have an inside (an open sheet, a dish) is an\n"
+    "  error; bones partly outside the skin are kept and reported.\n"
     "  --skin MESH             the body's outer surface (required)\n"
     "  --skin-name NAME        label name of the skin's interior (default soft_tissue)\n"
-    "  --bone NAME=MESH        a bone surface (repeatable); names like femur_left, tibia_left, humerus_right\n"
-    "                          let --skeleton-out and 'repose prepare --skeleton auto' find the joints\n"
+    "  --bone NAME=MESH        a bone surface (repeatable); names like hip_left, sacrum, femur_left, patella_left,\n"
+    "                          tibia_left, fibula_left, humerus_right let --skeleton-out and 'repose prepare\n"
+    "                          --skeleton auto' find the joints\n"
     "  --bones-split PREFIX=MESH  every connected piece of MESH is a bone PREFIX_1, PREFIX_2, ... (file order)\n"
     "  --tissue NAME=MESH      another soft tissue (repeatable), e.g. muscle=muscle.stl\n"
     "  --voxel MM              voxel size (required unless --reference)\n"
@@ -55,7 +59,7 @@ const char* kVoxelizeUsage =
     "  --unit-mm MM            millimetres per mesh unit (default 1; e.g. 10 for centimetres)\n"
     "  --padding VOXELS        background voxels around the skin (default 2)\n"
     "  --max-voxels N          largest grid accepted (default 536870912)\n"
-    "  --band VOXELS           OpenVDB narrow band half-width (default 3)\n"
+
     "  --skeleton-out FILE     also build skeleton.json with the automatic rig (see 'repose rig'); it needs\n"
     "                          bones named as the rig knows them (femur_left, tibia_left, hip_left, ...)\n"
     "  --max-gap MM            largest bone gap that still makes a joint, for --skeleton-out (default 6)\n";
@@ -70,7 +74,7 @@ struct Args {
 
 Args parse(int argc, char** argv, int first) {
   const std::set<std::string> valued{"skin",      "skin-name",  "voxel", "reference",    "out",    "unit-mm",
-                                     "padding",   "max-voxels", "band",  "skeleton-out", "max-gap"};
+                                     "padding",   "max-voxels", "skeleton-out", "max-gap"};
   const std::set<std::string> repeatable{"bone", "tissue", "bones-split"};
   Args a;
   for (int i = first; i < argc; ++i) {
@@ -180,11 +184,9 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   LabelVoxelizeOptions options;
   options.voxelMm = number(a, "voxel", 1.0);
   options.padVoxels = number(a, "padding", 2.0);
-  options.mesh.bandVoxels = number(a, "band", 3.0);
   const double maxVoxels = number(a, "max-voxels", double(options.maxVoxels));
   if (!(options.voxelMm > 0)) throw VoxelizeUsageError("--voxel must be positive");
   if (options.padVoxels < 0) throw VoxelizeUsageError("--padding must not be negative");
-  if (options.mesh.bandVoxels < 1) throw VoxelizeUsageError("--band must be at least 1");
   if (!(maxVoxels >= 1)) throw VoxelizeUsageError("--max-voxels must be at least 1");
   options.maxVoxels = std::size_t(maxVoxels);
   const double maxGap = number(a, "max-gap", 6.0);
@@ -270,7 +272,11 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   // Both outputs staged, then moved into place together.
   const std::filesystem::path out(outPath);
   AtomicOutputs files(out.has_parent_path() ? out.parent_path().string() : ".");
-  writeImage(repose_vtk::ToImage<vtkIntArray>(labels, "Labels"), files.stage(out.filename().string()));
+  {
+    vtkSmartPointer<vtkImageData> image = repose_vtk::ToImage<vtkIntArray>(labels, "Labels");
+    std::vector<std::int32_t>().swap(labels.data);  // the image holds the only copy while it is written
+    writeImage(image, files.stage(out.filename().string()));
+  }
   writeTextFile(files.stage(std::filesystem::path(tablePathFor(outPath)).filename().string()), labelTableToTsv(table));
   std::unique_ptr<AtomicOutputs> skeletonFiles;  // only when the skeleton goes to another folder
   if (!skeletonJson.empty()) {

@@ -1,4 +1,5 @@
-// Surface meshes to voxels: analytic volumes, open surfaces, self-intersections, label priorities.
+// Surface meshes to voxels: analytic volumes, holes, overlapping and nested pieces, mixed windings,
+// reflected grids, label priorities.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -8,70 +9,12 @@
 
 #include "mesh_topology.h"
 #include "mesh_voxelizer.h"
+#include "parallel_for.h"
+#include "triangle_soups.h"
 
 using namespace repose;
 
 namespace {
-
-/// UV sphere: `rings` latitude bands, `segments` longitude segments, outward triangles.
-TriangleMesh sphere(const Eigen::Vector3d& c, double r, int rings = 48, int segments = 96) {
-  TriangleMesh m;
-  const int n = 2 + (rings - 1) * segments;
-  m.V.resize(n, 3);
-  m.V.row(0) = (c + Eigen::Vector3d(0, 0, r)).transpose();
-  m.V.row(1) = (c - Eigen::Vector3d(0, 0, r)).transpose();
-  for (int a = 1; a < rings; ++a)
-    for (int b = 0; b < segments; ++b) {
-      const double th = M_PI * a / rings, ph = 2 * M_PI * b / segments;
-      m.V.row(2 + (a - 1) * segments + b) =
-          (c + r * Eigen::Vector3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th))).transpose();
-    }
-  std::vector<Eigen::Vector3i> f;
-  auto at = [&](int a, int b) { return 2 + (a - 1) * segments + (b % segments); };
-  for (int b = 0; b < segments; ++b) {
-    f.push_back({0, at(1, b), at(1, b + 1)});
-    f.push_back({1, at(rings - 1, b + 1), at(rings - 1, b)});
-    for (int a = 1; a + 1 < rings; ++a) {
-      f.push_back({at(a, b), at(a + 1, b), at(a + 1, b + 1)});
-      f.push_back({at(a, b), at(a + 1, b + 1), at(a, b + 1)});
-    }
-  }
-  m.F.resize(Eigen::Index(f.size()), 3);
-  for (std::size_t i = 0; i < f.size(); ++i) m.F.row(Eigen::Index(i)) = f[i].transpose();
-  return m;
-}
-
-/// Axis-aligned box from lo to hi, 12 triangles.
-TriangleMesh box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  TriangleMesh m;
-  m.V.resize(8, 3);
-  for (int i = 0; i < 8; ++i)
-    m.V.row(i) << ((i & 1) ? hi.x() : lo.x()), ((i & 2) ? hi.y() : lo.y()), ((i & 4) ? hi.z() : lo.z());
-  m.F.resize(12, 3);
-  m.F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
-  return m;
-}
-
-TriangleMesh concat(const TriangleMesh& a, const TriangleMesh& b) {
-  TriangleMesh m;
-  m.V.resize(a.V.rows() + b.V.rows(), 3);
-  m.V << a.V, b.V;
-  m.F.resize(a.F.rows() + b.F.rows(), 3);
-  m.F << a.F, (b.F.array() + int(a.V.rows())).matrix();
-  return m;
-}
-
-/// Drops the triangles whose centroid has z above `zCut`: a sphere with a round hole.
-TriangleMesh cutTop(const TriangleMesh& s, double zCut) {
-  TriangleMesh m;
-  m.V = s.V;
-  std::vector<int> keep;
-  for (Eigen::Index t = 0; t < s.F.rows(); ++t)
-    if ((s.V(s.F(t, 0), 2) + s.V(s.F(t, 1), 2) + s.V(s.F(t, 2), 2)) / 3 <= zCut) keep.push_back(int(t));
-  m.F.resize(Eigen::Index(keep.size()), 3);
-  for (std::size_t i = 0; i < keep.size(); ++i) m.F.row(Eigen::Index(i)) = s.F.row(keep[i]);
-  return m;
-}
 
 ImageGrid cube(double lo, double hi, double h) {
   ImageGrid g;
@@ -119,6 +62,46 @@ TEST(MeshTopology, SplitsComponentsInFileOrderAndWeldsCoincidentVertices) {
   MeshTriangles bad = b.F;
   bad(3, 1) = 8;
   EXPECT_THROW(splitConnectedComponents(b.V, bad), std::invalid_argument);
+}
+
+TEST(MeshTopology, HolesPiecesAndBoundaryChain) {
+  const double r = 10;
+  const TriangleMesh s = sphere({0, 0, 0}, r, 48, 96);
+  // A cap cut off at z = 5: one hole, its rim the 96 edges of a ring, closed up by a flat fan.
+  const TriangleMesh bowl = cutTop(s, 5.0);
+  const MeshTopology t = analyzeMeshTopology(bowl.V, bowl.F);
+  EXPECT_EQ(t.holes, 1u);
+  EXPECT_EQ(t.boundaryEdges, 96u);
+  EXPECT_EQ(boundaryLoops(bowl.V, bowl.F)[0].size(), 96u);
+  EXPECT_NEAR(t.largestHole, 2 * std::sqrt(r * r - 25), 0.1);
+  const double below = M_PI * (r + 5) * (r + 5) * (2 * r - 5) / 3;  // the ball below z = 5
+  EXPECT_NEAR(t.enclosedVolume, below, 0.01 * below);
+  const auto chain = boundaryChain(bowl.V, bowl.F);
+  ASSERT_EQ(chain.size(), 1u);
+  EXPECT_EQ(chain[0].size(), 96u);
+  EXPECT_TRUE(boundaryChain(s.V, s.F).empty());
+  // Half the sphere inside out: no hole, but its seam (the equator) is boundary twice over.
+  TriangleMesh seam = s;
+  for (Eigen::Index f = 0; f < seam.F.rows(); ++f)
+    if (seam.V(seam.F(f, 0), 2) + seam.V(seam.F(f, 1), 2) + seam.V(seam.F(f, 2), 2) > 0)
+      std::swap(seam.F(f, 1), seam.F(f, 2));
+  EXPECT_EQ(analyzeMeshTopology(seam.V, seam.F).holes, 0u);
+  const auto seams = boundaryChain(seam.V, seam.F);
+  ASSERT_EQ(seams.size(), 1u);
+  EXPECT_EQ(seams[0].size(), 2u * 96u);
+  std::size_t turned = 0;
+  const MeshTriangles fixed = consistentlyOriented(seam.V, seam.F, turned);
+  EXPECT_EQ(turned, std::size_t(seam.F.rows() / 2));  // from the first triangle, which was reversed
+  EXPECT_TRUE(boundaryChain(seam.V, fixed).empty());
+  // Two closed boxes stored apart that meet along coincident vertices (as a hip bone's parts do):
+  // one component once the vertices are merged, two pieces, non-manifold where they meet.
+  const TriangleMesh boxes = concat(box({0, 0, 0}, {1, 1, 1}), box({1, 0, 0}, {2, 1, 1}));
+  const MeshTopology b = analyzeMeshTopology(boxes.V, boxes.F);
+  EXPECT_EQ(b.components, 1u);
+  EXPECT_EQ(b.pieces, 2u);
+  EXPECT_GT(b.nonManifoldEdges, 0u);
+  EXPECT_EQ(b.holes, 0u);
+  EXPECT_TRUE(boundaryChain(boxes.V, boxes.F).empty());
 }
 
 TEST(MeshVoxelizer, BoxGivesItsExactVoxels) {
@@ -181,7 +164,7 @@ TEST(MeshVoxelizer, NestedInwardPieceIsACavityInvertedMeshIsSolid) {
   const MeshVoxelization m = voxelizeMesh(shell.V, shell.F, g);
   const double expected = 4.0 / 3.0 * M_PI * (1000 - 216);
   EXPECT_NEAR(double(m.insideVoxels) * 0.125, expected, 0.03 * expected);
-  EXPECT_EQ(m.cavities, 1u);
+  EXPECT_EQ(m.repairs.cavities, 1u);
   EXPECT_FALSE(m.at(24, 24, 24));  // the centre is in the cavity
   // The whole ball inside out is still a solid ball: orientation only matters between pieces.
   TriangleMesh flipped = sphere({0, 0, 0}, 10);
@@ -194,29 +177,108 @@ TEST(MeshVoxelizer, NestedInwardPieceIsACavityInvertedMeshIsSolid) {
   side.F.col(1).swap(side.F.col(2));
   const TriangleMesh two = concat(sphere({-2, 0, 0}, 9), side);
   const MeshVoxelization t = voxelizeMesh(two.V, two.F, cube(-12, 14, 0.5));
-  EXPECT_EQ(t.invertedPieces, 1u);
-  EXPECT_EQ(t.cavities, 0u);
+  EXPECT_EQ(t.repairs.invertedPieces, 1u);
+  EXPECT_EQ(t.repairs.cavities, 0u);
   EXPECT_TRUE(t.at(48, 26, 26));  // (12, 1, 1) inside the small sphere
 }
 
-TEST(MeshVoxelizer, SmallHoleIsBridgedLargeHoleIsReported) {
-  const TriangleMesh s = sphere({0, 0, 0}, 10, 48, 96);
-  const ImageGrid g = cube(-14, 14, 1.0);
-  // A hole of a few tenths of a voxel (the polar fan): the inside survives.
-  const TriangleMesh pin = cutTop(s, 9.95);
-  ASSERT_GT(analyzeMeshTopology(pin.V, pin.F).boundaryEdges, 0u);
-  const MeshVoxelization m = voxelizeMesh(pin.V, pin.F, g);
-  EXPECT_NEAR(double(m.insideVoxels), 4.0 / 3.0 * M_PI * 1000, 0.03 * 4.0 / 3.0 * M_PI * 1000);
-
-  // The top half removed: no inside; voxelizeLabels names the file and the holes.
-  const TriangleMesh bowl = cutTop(s, 0.0);
-  VoxelizePart skin{"body", "bowl.stl", VoxelizeRole::Skin, bowl.V, bowl.F};
+/// The error voxelizeLabels throws for a lone skin, or "" when it accepts it.
+std::string voxelizeError(const TriangleMesh& m, const std::string& file, const ImageGrid& g) {
   try {
-    voxelizeLabels({skin}, g);
-    FAIL() << "an open bowl was voxelized";
+    voxelizeLabels({VoxelizePart{"body", file, VoxelizeRole::Skin, m.V, m.F}}, g);
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("bowl.stl: the surface is not closed enough"), std::string::npos) << e.what();
+    return e.what();
   }
+  return "";
+}
+
+TEST(MeshVoxelizer, HolesAreSpannedOpenSheetsAreErrors) {
+  const double r = 10;
+  const TriangleMesh s = sphere({0, 0, 0}, r, 48, 96);
+  ImageGrid g = cube(-14, 14, 0.5);
+  g.origin += Eigen::Vector3d::Constant(0.13);  // no voxel centre on the rims' planes
+  // A hole of a few tenths of a voxel (the polar fan): the whole ball.
+  const TriangleMesh pin = cutTop(s, 9.95);
+  const MeshVoxelization p = voxelizeMesh(pin.V, pin.F, g);
+  EXPECT_EQ(p.topology.holes, 1u);
+  EXPECT_NEAR(double(p.insideVoxels) * 0.125, 4.0 / 3.0 * M_PI * 1000, 0.02 * 4.0 / 3.0 * M_PI * 1000);
+  EXPECT_GT(p.meanInsideWinding, 0.9);
+  // A cap 5 mm high removed (a hole 17 mm across): w = 1/2 on the flat disc spanning the planar rim,
+  // so the inside is the ball below the rim's plane.
+  const TriangleMesh bowl = cutTop(s, 5.0);
+  const MeshVoxelization m = voxelizeMesh(bowl.V, bowl.F, g);
+  double rim = -INFINITY;
+  for (const auto& loop : boundaryLoops(bowl.V, bowl.F))
+    for (int v : loop) rim = std::max(rim, bowl.V(v, 2));
+  const double below = M_PI * (r + rim) * (r + rim) * (2 * r - rim) / 3;
+  EXPECT_NEAR(double(m.insideVoxels) * 0.125, below, 0.02 * below) << "rim at z " << rim;
+  EXPECT_NEAR(m.topology.largestHole, 2 * std::sqrt(r * r - rim * rim), 0.2);
+  EXPECT_GT(m.evaluatedVoxels, 0u);
+  EXPECT_GT(m.meanInsideWinding, kMinInsideWinding);
+  EXPECT_EQ(voxelizeError(bowl, "bowl.stl", g), "");
+  // The top half removed, and a shallow dish: too open; the message names the file and the holes.
+  for (double cut : {0.0, -8.0}) {
+    const std::string e = voxelizeError(cutTop(s, cut), "dish.stl", g);
+    EXPECT_EQ(e.find("dish.stl: the surface is not closed enough to have an inside (1 hole(s)"), 0u) << e;
+    EXPECT_NE(e.find("winding number inside averages 0."), std::string::npos) << e;
+  }
+  // A flat sheet has no inside at all.
+  TriangleMesh sheet = cutTop(s, -9.0);
+  sheet.V.col(2).setZero();
+  const std::string e = voxelizeError(sheet, "sheet.obj", g);
+  EXPECT_EQ(e.find("sheet.obj: the surface is not closed enough to have an inside"), 0u) << e;
+  EXPECT_NE(e.find("nothing"), std::string::npos) << e;
+}
+
+TEST(MeshVoxelizer, OverlappingPiecesMakeTheirExactUnion) {
+  // Box faces halfway between voxel centres: the union's and the overlap's voxels are known exactly.
+  const TriangleMesh two = concat(box({-5, -3, -2}, {3, 3, 2}), box({-1, -1, -4}, {6, 2, 1}));
+  const MeshVoxelization m = voxelizeMesh(two.V, two.F, cube(-9.5, 9.5, 1.0));
+  const std::size_t a = 8 * 6 * 4, b = 7 * 3 * 5, both = 4 * 3 * 3;
+  EXPECT_EQ(m.insideVoxels, a + b - both);
+  EXPECT_EQ(m.overlapVoxels, both);
+  EXPECT_EQ(m.topology.pieces, 2u);
+  EXPECT_EQ(m.repairs.cavities + m.repairs.invertedPieces, 0u);
+}
+
+TEST(MeshVoxelizer, MixedWindingsAreTurnedToAgree) {
+  // Every 7th triangle reversed, as careless exports leave them: the same ball.
+  const TriangleMesh s = sphere({0.3, -0.2, 0.1}, 10, 24, 48);
+  TriangleMesh mixed = s;
+  std::size_t reversed = 0;
+  for (Eigen::Index t = 3; t < mixed.F.rows(); t += 7, ++reversed) std::swap(mixed.F(t, 1), mixed.F(t, 2));
+  const ImageGrid g = cube(-12, 12, 0.5);
+  const MeshVoxelization m = voxelizeMesh(mixed.V, mixed.F, g), ref = voxelizeMesh(s.V, s.F, g);
+  EXPECT_EQ(m.repairs.trianglesTurned, reversed);
+  EXPECT_EQ(m.inside, ref.inside);
+  std::size_t turned = 0;
+  EXPECT_EQ(consistentlyOriented(s.V, s.F, turned), s.F);
+  EXPECT_EQ(turned, 0u);
+}
+
+TEST(MeshVoxelizer, ReflectedGridAndOneThreadGiveTheSameVoxels) {
+  const TriangleMesh two = concat(sphere({-3, 0, 1}, 7, 24, 48), cutTop(sphere({4, 1, 0}, 6, 24, 48), 4.0));
+  ImageGrid g;
+  g.dims = {40, 36, 32};
+  g.spacing = Eigen::Vector3d(0.6, 0.5, 0.7);
+  g.direction = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
+  g.origin = -g.direction * g.spacing.cwiseProduct(Eigen::Vector3d(20, 18, 16));
+  const MeshVoxelization m = voxelizeMesh(two.V, two.F, g);
+  // The same lattice with its k axis reversed (a direction matrix of determinant -1).
+  ImageGrid f = g;
+  f.direction.col(2) = -g.direction.col(2);
+  f.origin = g.indexToPhysical(Eigen::Vector3d(0, 0, g.dims[2] - 1));
+  const MeshVoxelization r = voxelizeMesh(two.V, two.F, f);
+  ASSERT_EQ(r.insideVoxels, m.insideVoxels);
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i) ASSERT_EQ(m.at(i, j, k), r.at(i, j, g.dims[2] - 1 - k));
+  // One thread: the same voxels.
+  setParallelRunner([](std::size_t n, std::size_t, const RangeBody& body) { body(0, n); });
+  const MeshVoxelization one = voxelizeMesh(two.V, two.F, g);
+  setParallelRunner(nullptr);
+  EXPECT_EQ(one.inside, m.inside);
+  EXPECT_DOUBLE_EQ(one.meanInsideWinding, m.meanInsideWinding);
 }
 
 TEST(MeshVoxelizer, LabelsPrioritiesWarningsAndGrid) {

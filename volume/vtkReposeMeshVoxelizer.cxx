@@ -233,7 +233,6 @@ int vtkReposeMeshVoxelizer::RequestData(
     options.voxelMm = this->VoxelSize;
     options.padVoxels = this->PaddingVoxels;
     options.maxVoxels = static_cast<std::size_t>(this->MaxVoxels);
-    options.mesh.bandVoxels = this->BandVoxels;
     repose::ImageGrid grid;
     if (this->ReferenceImage)
     {
@@ -279,7 +278,6 @@ void vtkReposeMeshVoxelizer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "VoxelSize: " << this->VoxelSize << "\n";
   os << indent << "PaddingVoxels: " << this->PaddingVoxels << "\n";
   os << indent << "MaxVoxels: " << this->MaxVoxels << "\n";
-  os << indent << "BandVoxels: " << this->BandVoxels << "\n";
   os << indent << "ReferenceImage: " << this->ReferenceImage.GetPointer() << "\n";
   os << indent << "Parts: " << this->PartNames.size() << " named\n";
 }

@@ -1,6 +1,7 @@
 #ifndef vtkReposeMeshVoxelizer_h
 #define vtkReposeMeshVoxelizer_h
-// Closed surface meshes -> one label volume (repose::voxelizeLabels, OpenVDB level sets).
+// Surface meshes -> one label volume (repose::voxelizeLabels: inside where the generalized winding
+// number is at least 1/2, so holes, overlapping pieces and cavities are taken as they come).
 //
 // Input port 0 (repeatable): one vtkPolyData per surface (triangles; other polygons are split into
 // fans), points in physical LPS millimetres. By default connection 0 is the skin (its interior becomes
@@ -54,9 +55,6 @@ public:
   /// Largest voxel count accepted (default 512 Mi).
   vtkSetClampMacro(MaxVoxels, double, 1.0, 1e15);
   vtkGetMacro(MaxVoxels, double);
-  /// OpenVDB narrow band half-width in voxels (default 3).
-  vtkSetClampMacro(BandVoxels, double, 1.0, 100.0);
-  vtkGetMacro(BandVoxels, double);
 
   /// Optional lattice (origin, spacing, direction, extent) of the output; its scalars are not used.
   void SetReferenceImage(vtkImageData* image);
@@ -80,7 +78,6 @@ protected:
   double VoxelSize = 1.0;
   double PaddingVoxels = 2.0;
   double MaxVoxels = 536870912.0;
-  double BandVoxels = 3.0;
   vtkSmartPointer<vtkImageData> ReferenceImage;
   std::map<int, std::string> PartNames, PartSources;
   std::map<int, int> PartRoles;

@@ -185,3 +185,10 @@ def kabsch(a, b):
     G = np.eye(4)
     G[:3, :3], G[:3, 3] = R, cb - R @ ca
     return G, np.abs((a - ca) @ R.T + cb - b).max()
+
+
+def label_table(path):
+    """A labels.tsv (value, name, kind) as {name: (value, kind)}."""
+    with open(path) as f:
+        next(f)
+        return {name: (int(value), kind) for value, name, kind in (line.split() for line in f)}

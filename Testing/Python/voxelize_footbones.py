@@ -1,6 +1,6 @@
 """`repose voxelize --bones-split`: footbones.ply (26 separate bones in one file) split into its
 connected pieces, each its own label inside a synthetic skin (a box around the bones), each piece's
-voxels where the piece is; and bad input: a missing mesh, an open mesh, too many voxels -> a one-line
+voxels where the piece is; and bad input: a missing mesh, an open dish, too many voxels -> a one-line
 error naming the file, a non-zero exit and no output."""
 import os
 import shutil
@@ -15,7 +15,7 @@ from vtkmodules.vtkIOGeometry import vtkOBJWriter
 from vtkmodules.vtkIOPLY import vtkPLYReader
 from vtkmodules.vtkIOGeometry import vtkSTLWriter
 
-from repose_testing import SHARED, TEMP, Image, check, run
+from repose_testing import SHARED, TEMP, Image, check, label_table, run
 
 work = os.path.join(TEMP, "voxelize_footbones")
 shutil.rmtree(work, ignore_errors=True)
@@ -58,12 +58,7 @@ code, stdout, err = run("voxelize", "--skin", f"{work}/skin.stl", "--bones-split
                         "--voxel", 0.8, "--out", f"{work}/vox/labels.nrrd")
 print(stdout)
 vox = Image(f"{work}/vox/labels.nrrd")
-table = {}
-with open(f"{work}/vox/labels.tsv") as f:
-    next(f)
-    for line in f:
-        v, n, k = line.split()
-        table[n] = (int(v), k)
+table = label_table(f"{work}/vox/labels.tsv")
 bones = [n for n, (v, k) in table.items() if k == "bone"]
 check(len(bones) == 26 and bones == [f"foot_{i}" for i in range(1, 27)], "26 bones foot_1 .. foot_26", failures)
 check(table.get("soft_tissue", (0,))[0] == 1, "the box's inside is soft tissue", failures)
@@ -104,14 +99,14 @@ sphere = vtkSphereSource()
 sphere.SetRadius(10)
 sphere.SetThetaResolution(24)
 sphere.SetPhiResolution(24)
-sphere.SetStartPhi(40)  # an open bowl: the cap around the pole is missing
+sphere.SetStartPhi(110)  # a shallow dish, the bottom of a sphere: too open to have an inside
 wobj = vtkOBJWriter()
 wobj.SetFileName(f"{work}/bowl.obj")
 wobj.SetInputConnection(sphere.GetOutputPort())
 wobj.Write()
 cases = [
     ("missing mesh", ["--skin", f"{work}/nothing.stl", "--voxel", 1], "nothing.stl"),
-    ("open mesh", ["--skin", f"{work}/bowl.obj", "--voxel", 1], "bowl.obj: the surface is not closed enough"),
+    ("open dish", ["--skin", f"{work}/bowl.obj", "--voxel", 1], "bowl.obj: the surface is not closed enough"),
     ("too many voxels", ["--skin", f"{work}/skin.stl", "--unit-mm", UNIT, "--voxel", 0.01], "skin.stl:"),
     ("bad bone option", ["--skin", f"{work}/skin.stl", "--voxel", 1, "--bone", "femur.stl"], "NAME=MESH"),
 ]

@@ -12,7 +12,7 @@ from vtkmodules.vtkFiltersCore import vtkTriangleFilter
 from vtkmodules.vtkFiltersGeneral import vtkDiscreteFlyingEdges3D
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
-from repose_testing import TEMP, Image, check, dice, run
+from repose_testing import TEMP, Image, check, dice, label_table, run
 
 work = os.path.join(TEMP, "voxelize_phantom")
 shutil.rmtree(work, ignore_errors=True)
@@ -75,12 +75,7 @@ print(out)
 vox = Image(f"{work}/voxelized/labels.nii.gz")
 check(vox.dims == ph.dims and np.allclose(vox.origin, ph.origin) and np.allclose(vox.spacing, ph.spacing),
       "the output is on the reference grid", failures)
-names = {}
-with open(f"{work}/voxelized/labels.tsv") as f:
-    next(f)
-    for line in f:
-        value, name, kind = line.split()
-        names[name] = (int(value), kind)
+names = label_table(f"{work}/voxelized/labels.tsv")
 check(names.get("soft_tissue") == (1, "soft"), "label 1 is the skin's interior (soft)", failures)
 body = dice(vox.a > 0, ph.a > 0)
 check(body >= 0.99, f"body Dice {body:.4f} >= 0.99", failures)

@@ -1,5 +1,6 @@
 #include "animation_panel.h"
 
+#include <QCheckBox>
 #include <QFileInfo>
 #include <QHBoxLayout>
 #include <QLabel>
@@ -30,12 +31,22 @@ AnimationPanel::AnimationPanel(QWidget* parent) : QWidget(parent) {
   label_ = new QLabel("no motion loaded", this);
   label_->setMinimumWidth(220);
   export_ = new QPushButton("Export series (.pvd)…", this);
+  keepRoot_ = new QCheckBox("Keep root in place", this);
+  keepRoot_->setChecked(true);
+  keepRoot_->setToolTip("Drop the clip's root translation: the body moves its joints where it stands (a walk "
+                        "stays in view). Off, the root travels as in the clip (the command line's default; "
+                        "`repose animate --no-root-motion` is this switch).");
+  follow_ = new QCheckBox("Camera follows", this);
+  follow_->setChecked(true);
+  follow_->setToolTip("The 3D view moves with the body when its root travels");
   layout->addWidget(load_);
   layout->addWidget(back_);
   layout->addWidget(play_);
   layout->addWidget(forward_);
   layout->addWidget(slider_, 1);
   layout->addWidget(label_);
+  layout->addWidget(keepRoot_);
+  layout->addWidget(follow_);
   layout->addWidget(export_);
   timer_ = new QTimer(this);
   connect(timer_, &QTimer::timeout, this, &AnimationPanel::tick);
@@ -44,6 +55,10 @@ AnimationPanel::AnimationPanel(QWidget* parent) : QWidget(parent) {
   connect(play_, &QToolButton::clicked, this, &AnimationPanel::togglePlay);
   connect(back_, &QToolButton::clicked, this, [this] { stepFrames(-1); });
   connect(forward_, &QToolButton::clicked, this, [this] { stepFrames(1); });
+  connect(keepRoot_, &QCheckBox::toggled, this, [this] {
+    if (retargeter_) emit frameChanged(frame());  // show the frame again, with or without travel
+  });
+  connect(follow_, &QCheckBox::toggled, this, &AnimationPanel::cameraFollowChanged);
   connect(slider_, &QSlider::valueChanged, this, [this](int f) {
     updateLabel();
     emit frameChanged(f);
@@ -106,8 +121,15 @@ double AnimationPanel::frameTime() const { return frameTime_; }
 
 Pose AnimationPanel::pose(int frame) const {
   if (!retargeter_) throw std::runtime_error("no motion loaded");
-  return retargeter_->pose(std::clamp(frame, 0, frameCount() - 1));
+  Pose p = retargeter_->pose(std::clamp(frame, 0, frameCount() - 1));
+  if (keepRootInPlace()) p.translation.setZero();
+  return p;
 }
+
+bool AnimationPanel::keepRootInPlace() const { return keepRoot_->isChecked(); }
+void AnimationPanel::setKeepRootInPlace(bool keep) { keepRoot_->setChecked(keep); }
+bool AnimationPanel::cameraFollows() const { return follow_->isChecked(); }
+void AnimationPanel::setCameraFollows(bool follow) { follow_->setChecked(follow); }
 
 void AnimationPanel::setFrame(int frame) {
   if (retargeter_) slider_->setValue(std::clamp(frame, 0, frameCount() - 1));

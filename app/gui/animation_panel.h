@@ -1,7 +1,9 @@
 #pragma once
 // Motion capture playback: a BVH clip retargeted onto the case's skeleton (default CMU joint map or
 // a map file), a timeline slider, play/pause (in real time: frames are skipped when posing is
-// slower than the clip) and frame steps. Emits the pose of every shown frame.
+// slower than the clip) and frame steps. Emits the pose of every shown frame. "Keep root in place"
+// (on by default) drops the clip's root translation, so a walk stays in view; "Camera follows"
+// asks the 3D view to move with the body when the root does travel.
 #include <memory>
 
 #include <QElapsedTimer>
@@ -11,6 +13,7 @@
 #include "retarget.h"
 #include "skeleton.h"
 
+class QCheckBox;
 class QLabel;
 class QPushButton;
 class QSlider;
@@ -33,8 +36,13 @@ public:
   int frameCount() const;
   int frame() const;
   double frameTime() const;
+  /// The frame's pose; without root translation when the root is kept in place.
   Pose pose(int frame) const;
   QString clipName() const { return clipName_; }
+  bool keepRootInPlace() const;
+  void setKeepRootInPlace(bool keep);
+  bool cameraFollows() const;
+  void setCameraFollows(bool follow);
 
   void setFrame(int frame);
   void stepFrames(int delta);
@@ -48,6 +56,7 @@ signals:
   void playingChanged(bool playing);
   void loadRequested();
   void exportRequested();
+  void cameraFollowChanged(bool follow);
 
 private:
   void tick();
@@ -60,6 +69,7 @@ private:
   QToolButton *play_, *back_, *forward_;
   QPushButton *load_, *export_;
   QLabel* label_;
+  QCheckBox *keepRoot_, *follow_;
   QTimer* timer_;
   QElapsedTimer clock_;
   int playStartFrame_ = 0;

@@ -1,5 +1,5 @@
 // repose-gui: the Repose desktop application.
-//   repose-gui [CASE_DIR]                         open a prepared case at start
+//   repose-gui [CASE_DIR [--image CT]]            open a prepared case (and its CT) at start
 //   repose-gui --benchmark-drag CASE_DIR [--frames N] [--joint NAME]
 //       opens the case, drags a joint N times through the same code path as a mouse drag
 //       (pose, skin, deform surfaces, render) and prints the frame times.
@@ -26,6 +26,7 @@
 
 #include "main_window.h"
 #include "repose_pipeline.h"
+#include "repose_version.h"
 #include "scene_view.h"
 
 namespace {
@@ -114,24 +115,28 @@ int main(int argc, char** argv) {
   vtkNew<QuietOutputWindow> quiet;
   vtkOutputWindow::SetInstance(quiet);
   if (!std::getenv("REPOSE_VERBOSE")) vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
-  QString benchmarkCase, openDir, grabFile;
+  QString benchmarkCase, openDir, grabFile, imageFile;
   int frames = 200;
   std::string jointName = "left_hip";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
-      std::cout << "usage: repose-gui [CASE_DIR]\n"
+      std::cout << "usage: repose-gui [CASE_DIR [--image CT]]\n"
                    "       repose-gui --benchmark-drag CASE_DIR [--frames N] [--joint NAME]\n"
                    "       repose-gui CASE_DIR --grab FILE.png\n"
+                   "       repose-gui --version\n"
                    "  Opens the Repose desktop application (optionally with a prepared case).\n"
                    "  --benchmark-drag  drag a joint N times (default 200) as the mouse does and print frame times\n"
+                   "  --image CT        the case's CT (on its label grid), shown in the slice views\n"
                    "  --grab FILE.png   save a picture of the whole window once the case is shown, then quit\n";
       return 0;
     }
+    if (a == "--version") return std::cout << "repose-gui " << REPOSE_VERSION << "\n", 0;
     if (a == "--benchmark-drag" && i + 1 < argc) benchmarkCase = argv[++i];
     else if (a == "--frames" && i + 1 < argc) frames = std::max(1, std::atoi(argv[++i]));
     else if (a == "--joint" && i + 1 < argc) jointName = argv[++i];
     else if (a == "--grab" && i + 1 < argc) grabFile = argv[++i];
+    else if (a == "--image" && i + 1 < argc) imageFile = argv[++i];
     else if (!a.empty() && a[0] != '-') openDir = QString::fromStdString(a);
   }
   vtkOpenGLRenderWindow::SetGlobalMaximumNumberOfMultiSamples(0);
@@ -142,13 +147,24 @@ int main(int argc, char** argv) {
   window.show();
   if (!benchmarkCase.isEmpty()) return benchmarkDrag(window, benchmarkCase, frames, jointName);
   if (!openDir.isEmpty()) window.openCase(openDir);
+  if (!imageFile.isEmpty())
+    QObject::connect(&window, &repose::MainWindow::caseOpened, &window, [&] { window.loadRestImage(imageFile); });
+  QElapsedTimer clock;
+  clock.start();
   if (!grabFile.isEmpty()) {
-    // For documentation: the window as a user sees it, after the slice views have had time to fill.
-    QTimer::singleShot(4000, &window, [&] {
+    // For documentation: the window as a user sees it, once the case is open and the slice views are
+    // filled (or opening failed: the start page with its message).
+    auto* poll = new QTimer(&window);
+    QObject::connect(poll, &QTimer::timeout, &window, [&, poll] {
+      const bool busy = window.isOpening() || (window.hasCase() && window.slicesPending());
+      if (busy && clock.elapsed() < 600000) return;
+      poll->stop();
+      QApplication::processEvents();
       const bool ok = window.grab().save(grabFile);
       if (!ok) std::cerr << "repose-gui: error: " << grabFile.toStdString() << ": cannot write the picture\n";
       app.exit(ok ? 0 : 1);
     });
+    poll->start(500);
   }
   return app.exec();
 }

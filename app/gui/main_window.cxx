@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 
 #include <QAction>
 #include <QApplication>
@@ -14,15 +13,16 @@
 #include <QFileInfo>
 #include <QFormLayout>
 #include <QGroupBox>
+#include <QKeyEvent>
 #include <QLabel>
 #include <QMenuBar>
 #include <QMessageBox>
-#include <QProgressDialog>
 #include <QPushButton>
 #include <QSlider>
 #include <QSplitter>
 #include <QStackedWidget>
 #include <QStatusBar>
+#include <QTimer>
 #include <QVBoxLayout>
 #include <QtConcurrent/QtConcurrentRun>
 #include <vtkAlgorithm.h>
@@ -34,14 +34,17 @@
 #include <vtkPolyData.h>
 #include <vtkRenderWindow.h>
 #include <vtkUnstructuredGrid.h>
+#include <vtkVersion.h>
 
 #include "animation_panel.h"
-#include "atomic_outputs.h"
 #include "joint_panel.h"
+#include "label_legend.h"
+#include "lps_image.h"
 #include "open_scan_dialog.h"
-#include "pvd_series.h"
 #include "repose_pipeline.h"
+#include "repose_version.h"
 #include "scene_view.h"
+#include "series_export_dialog.h"
 #include "slice_views.h"
 #include "start_page.h"
 #include "vtkReposeCorotationalRelax.h"
@@ -54,14 +57,6 @@ const char* const kRelaxText = "Relax soft tissue (FEM)";
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-/// Writes one file through a temporary name in its folder, moved into place when complete.
-void writeAtomically(const QString& path, const std::function<void(const std::string&)>& write) {
-  const std::filesystem::path p(path.toStdString());
-  AtomicOutputs out(p.has_parent_path() ? p.parent_path().string() : ".");
-  write(out.stage(p.filename().string()));
-  out.commit();
-}
 
 const char* kImageFilter = "NIfTI (*.nii.gz *.nii);;NRRD (*.nrrd);;MetaImage (*.mha)";
 
@@ -101,6 +96,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   connect(animation_, &AnimationPanel::playingChanged, this, interactionOver);
   connect(&sliceWatcher_, &QFutureWatcher<SliceResult>::finished, this, &MainWindow::sliceUpdateFinished);
   connect(&relaxWatcher_, &QFutureWatcher<QString>::finished, this, &MainWindow::relaxDone);
+  qApp->installEventFilter(this);
   updateActions();
   resize(1500, 950);
 }
@@ -115,8 +111,30 @@ MainWindow::~MainWindow() {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
+  if (deferWhileExporting([this] { close(); }) || !confirmDiscardPose("quitting")) {
+    event->ignore();
+    return;
+  }
   if (worker_) statusBar()->showMessage("Waiting for the running preprocessing stage to stop…");
   QMainWindow::closeEvent(event);
+}
+
+bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
+  if (event->type() == QEvent::ShortcutOverride) {
+    auto* widget = qobject_cast<QWidget*>(watched);
+    if (widget && widget->window() == this) {  // not in dialogs, whose fields need their keys
+      auto* key = static_cast<QKeyEvent*>(event);
+      const Qt::KeyboardModifiers mods =
+          key->modifiers() & (Qt::ShiftModifier | Qt::ControlModifier | Qt::AltModifier | Qt::MetaModifier);
+      const QKeySequence pressed(int(mods) | key->key());
+      for (QAction* a : shortcutActions_)
+        if (a->isEnabled() && a->shortcuts().contains(pressed)) {
+          event->ignore();  // not overridden: the shortcut map triggers the action
+          return true;
+        }
+    }
+  }
+  return QMainWindow::eventFilter(watched, event);
 }
 
 void MainWindow::buildWorkspace() {
@@ -130,12 +148,17 @@ void MainWindow::buildWorkspace() {
   workspace->setStretchFactor(1, 1);
   stack_->addWidget(workspace);
 
+  auto dock = [this](const QString& title, const QString& name, QWidget* widget, Qt::DockWidgetArea area) {
+    auto* d = new QDockWidget(title, this);
+    d->setObjectName(name);
+    d->setWidget(widget);
+    d->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
+    addDockWidget(area, d);
+    return d;
+  };
   joints_ = new JointPanel(&controller_, this);
-  auto* jointDock = new QDockWidget("Skeleton and pose", this);
-  jointDock->setObjectName("jointDock");
-  jointDock->setWidget(joints_);
-  jointDock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
-  addDockWidget(Qt::LeftDockWidgetArea, jointDock);
+  joints_->setMinimumWidth(270);  // joint names and their angles side by side
+  QDockWidget* jointDock = dock("Skeleton and pose", "jointDock", joints_, Qt::LeftDockWidgetArea);
 
   auto* panel = new QWidget(this);
   auto* layout = new QVBoxLayout(panel);
@@ -180,19 +203,12 @@ void MainWindow::buildWorkspace() {
   form->addRow(relaxLabel_);
   layout->addWidget(deformation);
   layout->addStretch(1);
-  auto* rightDock = new QDockWidget("View and deformation", this);
-  rightDock->setObjectName("rightDock");
-  rightDock->setWidget(panel);
-  rightDock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
-  addDockWidget(Qt::RightDockWidgetArea, rightDock);
-
+  QDockWidget* rightDock = dock("View and deformation", "rightDock", panel, Qt::RightDockWidgetArea);
+  legend_ = new LabelLegend(this);
+  QDockWidget* legendDock = dock("Legend", "legendDock", legend_, Qt::RightDockWidgetArea);
   animation_ = new AnimationPanel(this);
-  auto* animDock = new QDockWidget("Motion", this);
-  animDock->setObjectName("motionDock");
-  animDock->setWidget(animation_);
-  animDock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
-  addDockWidget(Qt::BottomDockWidgetArea, animDock);
-  for (QDockWidget* dock : {jointDock, rightDock, animDock}) dock->setVisible(false);
+  QDockWidget* animDock = dock("Motion", "motionDock", animation_, Qt::BottomDockWidgetArea);
+  for (QDockWidget* dock : {jointDock, rightDock, legendDock, animDock}) dock->setVisible(false);
 
   frameLabel_ = new QLabel(this);
   sliceLabel_ = new QLabel(this);
@@ -221,6 +237,8 @@ void MainWindow::buildWorkspace() {
     scene_->render();
   });
   connect(scene_, &SceneView::jointPicked, joints_, &JointPanel::setSelectedJoint);
+  connect(legend_, &LabelLegend::jointActivated, joints_, &JointPanel::setSelectedJoint);
+  connect(animation_, &AnimationPanel::cameraFollowChanged, this, [this](bool on) { scene_->setCameraFollow(on); });
   connect(joints_, &JointPanel::jointSelected, scene_, &SceneView::setSelectedJoint);
   connect(scene_, &SceneView::dragStarted, &controller_, [this] { controller_.beginEdit(); });
   connect(scene_, &SceneView::dragEnded, &controller_, [this] { controller_.endEdit(); });
@@ -242,10 +260,7 @@ void MainWindow::buildWorkspace() {
     }
     loadClip(bvh, map);
   });
-  connect(animation_, &AnimationPanel::exportRequested, this, [this] {
-    const QString dir = QFileDialog::getExistingDirectory(this, "Export the animation into a folder");
-    if (!dir.isEmpty()) exportAnimation(dir);
-  });
+  connect(animation_, &AnimationPanel::exportRequested, this, [this] { export_[4]->trigger(); });
 }
 
 void MainWindow::buildMenus() {
@@ -286,6 +301,7 @@ void MainWindow::buildMenus() {
     if (!p.isEmpty()) exportPosedLabels(p);
   });
   export_[1] = add(exportMenu, "Posed &CT…", QKeySequence("Ctrl+Shift+E"), [this] {
+    if (!restImage_) return showError("no CT for this case (File > Load CT for this case)");
     const QString p = askSavePath("Export posed CT", "posed_image.nii.gz", kImageFilter);
     if (!p.isEmpty()) exportPosedImage(p);
   });
@@ -298,8 +314,13 @@ void MainWindow::buildMenus() {
     if (!p.isEmpty()) exportPosedSurfaces(p);
   });
   export_[4] = add(exportMenu, "&Animation series (.pvd)…", QKeySequence(), [this] {
-    const QString dir = QFileDialog::getExistingDirectory(this, "Export the animation into a folder");
-    if (!dir.isEmpty()) exportAnimation(dir);
+    if (!pipeline_ || !animation_->hasClip()) return showError("no motion loaded (Motion > Load motion)");
+    // Size per frame: the posed mesh and surfaces written as they are held (about what the files take).
+    const double mb = (pipeline_->restMesh()->GetActualMemorySize() + pipeline_->restSurfaces()->GetActualMemorySize()) / 1024.0;
+    SeriesExportDialog dialog(animation_->frameCount(), animation_->frameTime(), mb, this);
+    if (dialog.exec() != QDialog::Accepted) return;
+    const SeriesExportSettings s = dialog.settings();
+    exportAnimation(s.dir, s.stride, s.first, s.last);
   });
   export_[5] = add(file, "Screens&hot of the 3D view…", QKeySequence("F12"), [this] {
     const QString p = askSavePath("Screenshot", "repose.png", "PNG image (*.png)");
@@ -307,6 +328,10 @@ void MainWindow::buildMenus() {
   });
   file->addSeparator();
   closeCase_ = add(file, "&Close case", QKeySequence::Close, [this] { closeCase(); });
+  closeCase_->setObjectName("closeCase");
+  export_[0]->setObjectName("exportPosedLabels");
+  export_[1]->setObjectName("exportPosedCt");
+  export_[4]->setObjectName("exportSeries");
   add(file, "&Quit", QKeySequence::Quit, [this] { close(); });
 
   QMenu* edit = menuBar()->addMenu("&Edit");
@@ -323,11 +348,12 @@ void MainWindow::buildMenus() {
   add(view, "&Reset camera", QKeySequence("Ctrl+0"), [this] {
     scene_->resetCamera();
     scene_->render();
-  });
+  })->setObjectName("resetCamera");
+  add(view, "&Centre slices on the selected joint", QKeySequence("Ctrl+Shift+C"), [this] { centreSlicesOnSelection(); });
 
   QMenu* motion = menuBar()->addMenu("&Motion");
   add(motion, "&Load motion (BVH)…", QKeySequence("Ctrl+B"), [this] { emit animation_->loadRequested(); });
-  add(motion, "&Play / pause", QKeySequence(Qt::Key_Space), [this] { animation_->togglePlay(); });
+  add(motion, "&Play / pause", QKeySequence(Qt::Key_Space), [this] { animation_->togglePlay(); })->setObjectName("playPause");
   add(motion, "&Next frame", QKeySequence("Ctrl+Right"), [this] { animation_->stepFrames(1); });
   add(motion, "P&revious frame", QKeySequence("Ctrl+Left"), [this] { animation_->stepFrames(-1); });
 
@@ -337,11 +363,49 @@ void MainWindow::buildMenus() {
         this, "Controls",
         "3D view: left-drag on a bone rotates its joint; left-drag elsewhere turns the camera; right-drag "
         "zooms; middle-drag pans.\nSlice views: click moves the linked cursor; left-drag sets window/level; "
-        "sliders choose the slices.\nThe slice views show the posed volume when a drag ends.");
+        "sliders choose the slices; hover names the structure.\nSlices are shown as in 3D Slicer: axial from the "
+        "feet and coronal from the front (the patient's left on screen right), sagittal from the patient's left "
+        "(anterior on screen left); View > Centre slices on the selected joint (Ctrl+Shift+C).\nThe slice views "
+        "show the posed volume when a drag ends.\nJoint angles: flexion, abduction and internal rotation positive "
+        "on either side (spine: bending forwards, to the right, turning to the left).");
   });
+  add(help, "&About Repose", QKeySequence(), [this] { QMessageBox::about(this, "About Repose", aboutText()); });
+  for (QAction* a : findChildren<QAction*>())
+    if (!a->shortcuts().isEmpty()) shortcutActions_.push_back(a);
+}
+
+QString MainWindow::aboutText() const {
+  return QString("<b>Repose %1</b><p>Reposes segmented CT/MRI scans: label volume and skeleton in, the same "
+                 "anatomy in a new pose out (posed labels and CT, tet mesh, surfaces).</p>"
+                 "<p>Qt %2, VTK %3. The body is meshed by TetGen (AGPL).</p>")
+      .arg(REPOSE_VERSION, qVersion(), vtkVersion::GetVTKVersion());
+}
+
+QMessageBox::StandardButton MainWindow::ask(const QString& question, QMessageBox::StandardButtons buttons,
+                                            QMessageBox::StandardButton fallback) {
+  if (questionHandler_) return questionHandler_(question, buttons);
+  return QMessageBox::question(this, "Repose", question, buttons, fallback);
+}
+
+bool MainWindow::confirmDiscardPose(const QString& before) {
+  if (!hasCase() || !controller_.hasUnsavedPose()) return true;
+  const auto answer = ask("The pose has changes that are not saved. Save the pose before " + before + "?",
+                          QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+  if (answer == QMessageBox::Discard) return true;
+  if (answer != QMessageBox::Save) return false;
+  const QString path = askSavePath("Save pose", "pose.json", "Pose (*.json)");
+  return !path.isEmpty() && savePose(path);
+}
+
+bool MainWindow::deferWhileExporting(const std::function<void()>& again) {
+  if (!exporting_) return false;
+  abortExport_ = true;
+  QTimer::singleShot(20, this, again);
+  return true;
 }
 
 QString MainWindow::askSavePath(const QString& title, const QString& name, const QString& filter) {
+  if (savePathHandler_) return savePathHandler_(title, name);
   return QFileDialog::getSaveFileName(this, title, name, filter);
 }
 
@@ -375,6 +439,7 @@ void MainWindow::updateActions() {
   redo_->setEnabled(ready && controller_.canRedo());
   for (QAction* a : {savePose_, loadPose_, closeCase_, loadCt_}) a->setEnabled(ready);
   for (QAction* a : export_) a->setEnabled(ready);
+  export_[1]->setEnabled(ready && restImage_);  // no save dialog for a CT the case does not have
   export_[4]->setEnabled(ready && animation_->hasClip());
 }
 
@@ -399,6 +464,7 @@ void MainWindow::openScan(const OpenRequest& request) { startWorker(request); }
 
 void MainWindow::startWorker(const OpenRequest& request) {
   if (worker_) return showError("a case is already being opened; cancel it first");
+  if (!confirmDiscardPose("opening another case")) return;
   worker_ = new PreprocessWorker(request, this);
   connect(worker_, &PreprocessWorker::progress, start_, &StartPage::setProgress);
   connect(worker_, &QThread::finished, this, &MainWindow::workerFinished);
@@ -427,6 +493,8 @@ void MainWindow::cancelOpening() {
 }
 
 void MainWindow::workerFinished() {
+  // The new case replaces the pipeline an export is writing from: once the export has stopped.
+  if (deferWhileExporting([this] { workerFinished(); })) return;
   PreprocessWorker* w = worker_;
   worker_ = nullptr;
   if (!w) return;
@@ -444,7 +512,7 @@ void MainWindow::workerFinished() {
     return;
   }
   if (!guarded([&] { installCase(w->result()); })) {
-    closeCase();
+    dropCase();
     emit openFailed("cannot show the case");
     return;
   }
@@ -454,6 +522,7 @@ void MainWindow::workerFinished() {
 void MainWindow::installCase(const OpenResult& result) {
   sliceWatcher_.waitForFinished();
   stopRelaxation();
+  animation_->pause();
   ++caseGeneration_;
   pipeline_ = result.pipeline;
   table_ = result.table;
@@ -470,10 +539,14 @@ void MainWindow::installCase(const OpenResult& result) {
   for (QDockWidget* dock : findChildren<QDockWidget*>()) dock->setVisible(true);
   scene_->setCase(pipeline_->restSurfaces(), skeleton, table_);
   scene_->setSkinOpacity(skinOpacity_->value() / 100.0);
-  controller_.setSkeleton(skeleton);  // poses (rest) and renders through poseChanged
-  joints_->rebuild();
+  scene_->setCameraFollow(animation_->cameraFollows());
   animation_->setSkeleton(skeleton);
+  // The joint panel rebuilds on skeletonChanged, before this poses (rest) and renders.
+  controller_.setSkeleton(skeleton);
+  legend_->setCase(pipeline_->restSurfaces(), table_, skeleton);
+  slices_->clear();  // a new case: the views fit its grid and centre the cursor
   slices_->setVolumes(pipeline_->restLabels(), restImage_, table_, boneLabels_);
+  slicesRoot_ = rootCentre();
   slicesDirty_ = false;
   setWindowTitle("Repose — " + title_);
   statusBar()->showMessage(QString("Opened %1: %2 nodes, %3 tets, %4 surface triangles")
@@ -487,6 +560,13 @@ void MainWindow::installCase(const OpenResult& result) {
 }
 
 void MainWindow::closeCase() {
+  if (deferWhileExporting([this] { closeCase(); })) return;
+  if (worker_) cancelOpening();
+  if (!confirmDiscardPose("closing the case")) return;
+  dropCase();
+}
+
+void MainWindow::dropCase() {
   sliceWatcher_.waitForFinished();
   stopRelaxation();
   ++caseGeneration_;
@@ -494,9 +574,9 @@ void MainWindow::closeCase() {
   restImage_ = nullptr;
   scene_->clearCase();
   slices_->clear();
+  legend_->clear();
   animation_->setSkeleton(Skeleton());
   controller_.setSkeleton(Skeleton());
-  joints_->rebuild();
   stack_->setCurrentWidget(start_);
   for (QDockWidget* dock : findChildren<QDockWidget*>()) dock->setVisible(false);
   setWindowTitle("Repose");
@@ -569,6 +649,23 @@ bool MainWindow::setSkinning(const QString& method) {
   });
 }
 
+Eigen::Vector3d MainWindow::jointCentre(int joint) const {
+  if (joint < 0 || joint >= controller_.jointCount()) return Eigen::Vector3d::Zero();
+  return controller_.globalTransforms()[std::size_t(joint)] * controller_.skeleton().joints[std::size_t(joint)].center;
+}
+
+Eigen::Vector3d MainWindow::rootCentre() const {
+  for (int j = 0; j < controller_.jointCount(); ++j)
+    if (controller_.skeleton().joints[std::size_t(j)].parent < 0) return jointCentre(j);
+  return Eigen::Vector3d::Zero();
+}
+
+void MainWindow::centreSlicesOnSelection() {
+  if (!pipeline_ || !slices_->hasVolumes() || controller_.jointCount() == 0) return;
+  const int joint = joints_->selectedJoint();
+  slices_->centreOn(joint >= 0 ? jointCentre(joint) : rootCentre());
+}
+
 // --- posed volumes in the background ---------------------------------------------------------
 
 void MainWindow::requestSliceUpdate() {
@@ -603,17 +700,14 @@ void MainWindow::startSliceUpdate() {
     posed->SetPoints(points);
   }
   const int generation = caseGeneration_;
+  const Eigen::Vector3d root = rootCentre();
   sliceLabel_->setText("Updating the slice views…");
   sliceWatcher_.setFuture(QtConcurrent::run([=]() -> SliceResult {
     SliceResult r;
     r.generation = generation;
+    r.root = root;
     const auto t0 = Clock::now();
     try {
-      if (rest) {
-        r.labels = labels;
-        r.image = image;
-        return r;
-      }
       auto resample = [&](vtkImageData* volume, bool nearest, double background) {
         auto filter = vtkSmartPointer<vtkReposePosedVolume>::New();
         filter->SetInputData(0, volume);
@@ -629,12 +723,13 @@ void MainWindow::startSliceUpdate() {
         out->ShallowCopy(filter->GetOutput());
         return out;
       };
-      r.labels = resample(labels, true, 0);
-      if (image) {
-        double range[2];
-        image->GetPointData()->GetScalars()->GetRange(range);
-        r.image = resample(image, false, range[0]);
-      }
+      double range[2] = {0, 0};
+      if (image) image->GetPointData()->GetScalars()->GetRange(range);
+      r.labels = rest ? labels : resample(labels, true, 0);
+      if (image) r.image = rest ? image : resample(image, false, range[0]);
+      // In patient coordinates for the slice views (off the UI thread: it may reorder every voxel).
+      r.labels = lpsAlignedImage(r.labels, true);
+      r.image = lpsAlignedImage(r.image, false, range[0]);
     } catch (const std::exception& e) {
       r.error = e.what();
     }
@@ -651,7 +746,12 @@ void MainWindow::sliceUpdateFinished() {
     showError(r.error);
     return;
   }
+  // The cursor travels with the body (a clip's root motion), and the views pan along.
+  const Eigen::Vector3d moved = r.root - slicesRoot_;
+  const Eigen::Vector3d cursor = slices_->cursorPosition() + moved;
   slices_->setVolumes(r.labels, r.image, table_, boneLabels_);
+  if (moved.norm() > 1.0) slices_->centreOn(cursor);
+  slicesRoot_ = r.root;
   sliceLabel_->setText(r.seconds > 0 ? QString("Posed volume %1 s").arg(r.seconds, 0, 'f', 2) : QString());
   if (slicesDirty_ && !controller_.editing() && !animation_->playing() && !isRelaxing()) startSliceUpdate();
 }
@@ -686,14 +786,19 @@ void MainWindow::relaxCurrentPose() {
   });
 }
 
-void MainWindow::relaxDone() {
+void MainWindow::finishRelaxationState() {
   relaxing_ = false;
   if (relaxObserver_ && pipeline_ && pipeline_->relaxation()) pipeline_->relaxation()->RemoveObserver(relaxObserver_);
   relaxObserver_ = 0;
   for (QWidget* w : std::initializer_list<QWidget*>{joints_, animation_, relax_, skinning_}) w->setEnabled(true);
   relax_->setText(kRelaxText);
-  const QString error = relaxWatcher_.result();
   updateActions();
+}
+
+void MainWindow::relaxDone() {
+  if (!relaxing_) return;  // stopRelaxation() has already cleaned up (the case was closed)
+  finishRelaxationState();
+  const QString error = relaxWatcher_.result();
   if (!pipeline_ || relaxGeneration_ != caseGeneration_) return;  // the case was closed meanwhile
   if (pipeline_->relaxation() && pipeline_->relaxation()->GetCancelled()) {
     guarded([&] { pipeline_->setRelaxation(false); });
@@ -745,8 +850,10 @@ void MainWindow::cancelRelaxation() {
 }
 
 void MainWindow::stopRelaxation() {
-  if (isRelaxing() && pipeline_) pipeline_->cancelRelaxation();
+  if (!isRelaxing()) return;
+  if (pipeline_) pipeline_->cancelRelaxation();
   relaxWatcher_.waitForFinished();
+  finishRelaxationState();  // the queued relaxDone() then finds nothing to do
 }
 
 void MainWindow::dropRelaxation() {
@@ -754,137 +861,6 @@ void MainWindow::dropRelaxation() {
   guarded([&] { pipeline_->setRelaxation(false); });
   scene_->setGhost(nullptr);
   relaxLabel_->setText("Skinning only (the pose changed since the relaxation).");
-}
-
-// --- files -----------------------------------------------------------------------------------
-
-bool MainWindow::savePose(const QString& path) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    writeAtomically(path, [&](const std::string& tmp) { writeTextFile(tmp, poseToJson(controller_.pose())); });
-    statusBar()->showMessage("Pose saved to " + path, 5000);
-  });
-}
-
-bool MainWindow::loadPose(const QString& path) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    const std::string p = path.toStdString();
-    Pose pose;
-    try {
-      pose = parsePoseJson(readTextFile(p));
-      validatePose(pose, controller_.skeleton());
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(p + ": " + e.what());
-    }
-    animation_->pause();
-    controller_.setPose(pose);
-  });
-}
-
-bool MainWindow::loadRestImage(const QString& path) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    auto image = readIntensityImage(path.toStdString());
-    pipeline_->setRestImage(image, path.toStdString());
-    restImage_ = image;
-    requestSliceUpdate();
-  });
-}
-
-bool MainWindow::exportPosedLabels(const QString& path) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    QApplication::setOverrideCursor(Qt::WaitCursor);
-    writeAtomically(path, [&](const std::string& tmp) { writeImage(pipeline_->posedLabels(), tmp); });
-    QApplication::restoreOverrideCursor();
-    statusBar()->showMessage("Posed label volume written to " + path, 5000);
-  });
-}
-
-bool MainWindow::exportPosedImage(const QString& path) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    if (!restImage_) throw std::runtime_error("no CT for this case (File > Load CT for this case)");
-    QApplication::setOverrideCursor(Qt::WaitCursor);
-    writeAtomically(path, [&](const std::string& tmp) { writeImage(pipeline_->posedImage(), tmp); });
-    QApplication::restoreOverrideCursor();
-    statusBar()->showMessage("Posed CT written to " + path, 5000);
-  });
-}
-
-bool MainWindow::exportPosedMesh(const QString& path) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    writeAtomically(path, [&](const std::string& tmp) { writeMesh(pipeline_->posedMesh(), tmp); });
-    statusBar()->showMessage("Posed mesh written to " + path, 5000);
-  });
-}
-
-bool MainWindow::exportPosedSurfaces(const QString& path) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    writeAtomically(path, [&](const std::string& tmp) { writeSurfaces(pipeline_->posedSurfaces(), tmp); });
-    statusBar()->showMessage("Posed surfaces written to " + path, 5000);
-  });
-}
-
-bool MainWindow::exportScreenshot(const QString& path) {
-  return guarded([&] {
-    writeAtomically(path, [&](const std::string& tmp) { scene_->saveScreenshot(tmp); });
-    statusBar()->showMessage("Screenshot written to " + path, 5000);
-  });
-}
-
-bool MainWindow::loadClip(const QString& bvhPath, const QString& mapPath) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    animation_->loadClip(bvhPath, mapPath);
-    updateActions();
-  });
-}
-
-bool MainWindow::exportAnimation(const QString& dir, int step) {
-  return guarded([&] {
-    if (!pipeline_) throw std::runtime_error("no case open");
-    if (!animation_->hasClip()) throw std::runtime_error("no motion loaded (Motion > Load motion)");
-    animation_->pause();
-    const int frames = animation_->frameCount();
-    QProgressDialog progress("Writing the animation series…", "Cancel", 0, frames, this);
-    progress.setWindowModality(Qt::WindowModal);
-    progress.setMinimumDuration(500);
-    AtomicOutputs out(dir.toStdString());
-    makeDirectories(out.stage("frames"));
-    std::vector<PvdEntry> entries;
-    bool cancelled = false;
-    try {
-      for (int f = 0; f < frames; f += std::max(1, step)) {
-        progress.setValue(f);
-        if (progress.wasCanceled()) {
-          cancelled = true;
-          break;
-        }
-        pipeline_->setPose(animation_->pose(f));
-        const double time = f * animation_->frameTime();
-        char name[64];
-        std::snprintf(name, sizeof(name), "frames/mesh_%05d.vtu", f);
-        writeMesh(pipeline_->posedMesh(), out.stage(name));
-        entries.push_back({time, 0, name});
-        std::snprintf(name, sizeof(name), "frames/surfaces_%05d.vtp", f);
-        writeSurfaces(pipeline_->posedSurfaces(), out.stage(name));
-        entries.push_back({time, 1, name});
-      }
-    } catch (...) {
-      pipeline_->setPose(controller_.pose());
-      throw;
-    }
-    pipeline_->setPose(controller_.pose());
-    progress.setValue(frames);
-    if (cancelled) return;  // the temporary folder is removed
-    writeTextFile(out.stage("animation.pvd"), pvdText(entries));
-    out.commit();
-    statusBar()->showMessage(QString("%1 frames written to %2/animation.pvd").arg(entries.size() / 2).arg(dir), 8000);
-  });
 }
 
 }  // namespace repose

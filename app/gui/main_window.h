@@ -1,14 +1,18 @@
 #pragma once
 // The Repose main window: start screen, then the workspace (joint panel left, 3D view centre,
-// slice views below it, deformation panel right, motion timeline at the bottom). Drives one
-// repose::Pipeline: posing on the UI thread (fast), preprocessing, posed-volume resampling and
-// FEM relaxation in the background.
+// slice views below it, deformation panel and legend right, motion timeline at the bottom). Drives
+// one repose::Pipeline: posing on the UI thread (fast), preprocessing, posed-volume resampling and
+// FEM relaxation in the background. Every case flow (open, close, open another with more or fewer
+// joints, open a scan, close while preparing, relaxing or exporting) ends in a usable window; a
+// failure is a dialog with one line.
 #include <functional>
 #include <memory>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <QFutureWatcher>
 #include <QMainWindow>
+#include <QMessageBox>
 #include <vtkImageData.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
@@ -31,6 +35,7 @@ namespace repose {
 
 class AnimationPanel;
 class JointPanel;
+class LabelLegend;
 class Pipeline;
 class SceneView;
 class SliceViews;
@@ -54,6 +59,9 @@ public:
   void cancelOpening();
   bool isOpening() const { return worker_ != nullptr; }
   bool hasCase() const { return bool(pipeline_); }
+  bool hasRestImage() const { return bool(restImage_); }
+  /// Closes the case (asks first when the pose has unsaved changes; waits for a running export or
+  /// relaxation to stop, cancels a preparation).
   void closeCase();
 
   // --- pose files and exports (throw nothing: errors go to the error handler) ----------------
@@ -65,9 +73,18 @@ public:
   bool exportPosedMesh(const QString& path);
   bool exportPosedSurfaces(const QString& path);
   bool exportScreenshot(const QString& path);
-  /// The loaded clip as a ParaView series: DIR/animation.pvd + frames/ (mesh and surfaces).
-  bool exportAnimation(const QString& dir, int step = 1);
+  /// The loaded clip as a ParaView series: DIR/animation.pvd + frames/ (mesh and surfaces) of
+  /// frames first, first + step, ... up to last (-1: the clip's end), and DIR/labels.tsv.
+  bool exportAnimation(const QString& dir, int step = 1, int first = 0, int last = -1);
+  bool isExporting() const { return exporting_; }
+  /// Loads a clip; over a hand-made pose it asks first (Undo brings the pose back). False when the
+  /// user declines or on an error.
   bool loadClip(const QString& bvhPath, const QString& mapPath = QString());
+  /// Moves the slice views' cursor to the selected joint's posed centre (the root's without a
+  /// selection) and pans them there.
+  void centreSlicesOnSelection();
+  /// The About box's text (version, what Repose is, the libraries it runs on).
+  QString aboutText() const;
   /// Skinning "dqs" | "lbs".
   bool setSkinning(const QString& method);
   /// FEM relaxation of the current pose in the background; relaxFinished() follows.
@@ -87,11 +104,21 @@ public:
   SliceViews* slices() { return slices_; }
   JointPanel* jointPanel() { return joints_; }
   AnimationPanel* animation() { return animation_; }
+  LabelLegend* legend() { return legend_; }
+  const LabelTable& labelTable() const { return table_; }
   const FrameTiming& lastFrameTiming() const { return timing_; }
   /// True while the slice views wait for a background resampling of the posed volumes.
   bool slicesPending() const { return sliceWatcher_.isRunning() || slicesDirty_; }
   /// Replaces the error dialog (tests record the one-line messages instead).
   void setErrorHandler(std::function<void(const QString&)> handler) { errorHandler_ = std::move(handler); }
+  /// Replaces the question dialogs (unsaved pose, a clip over a hand pose): the handler gets the
+  /// question and the buttons offered and returns the button pressed.
+  using QuestionHandler = std::function<QMessageBox::StandardButton(const QString&, QMessageBox::StandardButtons)>;
+  void setQuestionHandler(QuestionHandler handler) { questionHandler_ = std::move(handler); }
+  /// Replaces the save-file dialog (title, suggested name) -> path, empty to cancel.
+  void setSavePathHandler(std::function<QString(const QString&, const QString&)> handler) {
+    savePathHandler_ = std::move(handler);
+  }
   /// Rotates the selected joint as a mouse drag of (dx, dy) pixels does; returns the frame time.
   double simulateDrag(double dx, double dy);
 
@@ -102,6 +129,9 @@ signals:
 
 protected:
   void closeEvent(QCloseEvent* event) override;
+  /// Application-wide: the window's shortcuts (Space, Ctrl+E, Ctrl+0, ...) win over whichever
+  /// widget has the keyboard focus (a spin box takes Ctrl+E as "end of line", a button Space).
+  bool eventFilter(QObject* watched, QEvent* event) override;
 
 private:
   void buildMenus();
@@ -109,6 +139,17 @@ private:
   void startWorker(const OpenRequest& request);
   void workerFinished();
   void installCase(const OpenResult& result);
+  void dropCase();  // closes without asking
+  /// True to go on: the pose is saved, discarded, or had no unsaved changes. `before` completes
+  /// "Save the pose before ...?".
+  bool confirmDiscardPose(const QString& before);
+  QMessageBox::StandardButton ask(const QString& question, QMessageBox::StandardButtons buttons,
+                                  QMessageBox::StandardButton fallback);
+  /// While an export runs, asks it to stop and runs `again` once it has: true if deferred.
+  bool deferWhileExporting(const std::function<void()>& again);
+  void finishRelaxationState();  // widgets and flags back to posing after a relaxation
+  Eigen::Vector3d jointCentre(int joint) const;  // posed, LPS mm
+  Eigen::Vector3d rootCentre() const;
   void poseChanged();
   void requestSliceUpdate();
   void startSliceUpdate();
@@ -139,11 +180,17 @@ private:
   unsigned long relaxObserver_ = 0;  // the ProgressEvent observer on the relaxation filter while it runs
   QString relaxSummary_;
   bool slicesDirty_ = false;
+  Eigen::Vector3d slicesRoot_ = Eigen::Vector3d::Zero();  // posed root centre the slice views show
   int caseGeneration_ = 0;
   std::function<void(const QString&)> errorHandler_;
+  QuestionHandler questionHandler_;
+  std::function<QString(const QString&, const QString&)> savePathHandler_;
+  bool exporting_ = false, abortExport_ = false;
+  std::vector<QAction*> shortcutActions_;
 
   struct SliceResult {
     vtkSmartPointer<vtkImageData> labels, image;
+    Eigen::Vector3d root = Eigen::Vector3d::Zero();  // posed root centre of the pose shown
     int generation = 0;
     double seconds = 0;
     QString error;
@@ -157,6 +204,7 @@ private:
   SliceViews* slices_;
   JointPanel* joints_;
   AnimationPanel* animation_;
+  LabelLegend* legend_;
   QComboBox* skinning_;
   QPushButton* relax_;
   QCheckBox* showBefore_;

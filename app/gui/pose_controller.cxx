@@ -1,58 +1,8 @@
 #include "pose_controller.h"
 
-#include <algorithm>
-#include <cctype>
-#include <cmath>
 #include <stdexcept>
 
 namespace repose {
-namespace {
-
-constexpr double kDeg = M_PI / 180.0;
-
-bool contains(const std::string& name, const char* word) {
-  std::string lower = name;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  return lower.find(word) != std::string::npos;
-}
-
-/// Generous anatomical ranges (the sign of flexion depends on the side, so ranges are symmetric).
-AngleLimits limitsFor(const Joint& joint) {
-  using V = Eigen::Vector3d;
-  if (joint.parent < 0) return {V(-180, -90, -180), V(180, 90, 180)};
-  if (contains(joint.name, "knee") || contains(joint.name, "elbow") || contains(joint.name, "forearm") ||
-      contains(joint.name, "tibia"))
-    return {V(-150, -15, -45), V(150, 15, 45)};
-  if (contains(joint.name, "spine") || contains(joint.name, "neck") || contains(joint.name, "vertebra") ||
-      contains(joint.name, "head") || contains(joint.name, "skull"))
-    return {V(-60, -45, -60), V(60, 45, 60)};
-  if (contains(joint.name, "ankle") || contains(joint.name, "foot") || contains(joint.name, "wrist") ||
-      contains(joint.name, "hand"))
-    return {V(-60, -45, -45), V(60, 45, 45)};
-  return {V(-150, -90, -90), V(150, 90, 90)};
-}
-
-}  // namespace
-
-Eigen::Quaterniond quaternionFromAngles(const Eigen::Vector3d& d) {
-  return Eigen::Quaterniond(Eigen::AngleAxisd(d.z() * kDeg, Eigen::Vector3d::UnitZ()) *
-                            Eigen::AngleAxisd(d.y() * kDeg, Eigen::Vector3d::UnitY()) *
-                            Eigen::AngleAxisd(d.x() * kDeg, Eigen::Vector3d::UnitX()));
-}
-
-Eigen::Vector3d anglesFromQuaternion(const Eigen::Quaterniond& q) {
-  const Eigen::Matrix3d R = q.normalized().toRotationMatrix();
-  const double y = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
-  double x, z;
-  if (std::fabs(R(2, 0)) < 1 - 1e-9) {
-    x = std::atan2(R(2, 1), R(2, 2));
-    z = std::atan2(R(1, 0), R(0, 0));
-  } else {  // gimbal lock: put everything in z
-    x = 0;
-    z = std::atan2(-R(0, 1), R(1, 1));
-  }
-  return Eigen::Vector3d(x, y, z) / kDeg;
-}
 
 bool PoseController::State::operator==(const State& o) const {
   if (rotations.size() != o.rotations.size() || translation != o.translation) return false;
@@ -67,13 +17,21 @@ PoseController::PoseController(QObject* parent) : QObject(parent) {}
 
 void PoseController::setSkeleton(const Skeleton& skeleton) {
   skeleton_ = skeleton;
+  classes_.clear();
   limits_.clear();
-  for (const Joint& j : skeleton_.joints) limits_.push_back(limitsFor(j));
+  for (const Joint& j : skeleton_.joints) {
+    classes_.push_back(classifyJoint(j.name, j.parent < 0));
+    limits_.push_back(jointLimits(classes_.back()));
+  }
   state_ = State();
   state_.rotations.assign(skeleton_.size(), Eigen::Quaterniond::Identity());
+  saved_ = state_;
+  fromClip_ = false;
   undo_.clear();
   redo_.clear();
   editDepth_ = 0;
+  // Joint indices of the old skeleton are void from here: whoever keeps them rebuilds first.
+  emit skeletonChanged();
   emit poseChanged();
   emit historyChanged();
 }
@@ -86,12 +44,17 @@ void PoseController::checkJoint(int joint) const {
 
 Eigen::Vector3d PoseController::angles(int joint) const {
   checkJoint(joint);
-  return anglesFromQuaternion(state_.rotations[std::size_t(joint)]);
+  return anatomicalAngles(state_.rotations[std::size_t(joint)], classes_[std::size_t(joint)]);
 }
 
-AngleLimits PoseController::limits(int joint) const {
+JointLimits PoseController::limits(int joint) const {
   checkJoint(joint);
   return limits_[std::size_t(joint)];
+}
+
+const JointClass& PoseController::jointClass(int joint) const {
+  checkJoint(joint);
+  return classes_[std::size_t(joint)];
 }
 
 Pose PoseController::pose() const {
@@ -105,23 +68,40 @@ Pose PoseController::pose() const {
 
 std::vector<Eigen::Isometry3d> PoseController::globalTransforms() const { return forwardKinematics(skeleton_, pose()); }
 
+bool PoseController::atRest() const {
+  State rest;
+  rest.rotations.assign(skeleton_.size(), Eigen::Quaterniond::Identity());
+  return state_ == rest;
+}
+
+bool PoseController::hasUnsavedPose() const { return !fromClip_ && !(state_ == saved_); }
+
+bool PoseController::isHandPose() const { return !fromClip_ && !atRest(); }
+
+void PoseController::markSaved() {
+  saved_ = state_;
+  fromClip_ = false;
+}
+
 void PoseController::apply(const State& next, bool record) {
   if (next == state_) return;
-  if (editDepth_ == 0 && record) {
+  // A clip's first frame over a hand pose keeps that pose one undo away; later frames are not steps.
+  const bool step = editDepth_ == 0 && (record || (!fromClip_ && !atRest()));
+  if (step) {
     undo_.push_back(state_);
     redo_.clear();
   }
   state_ = next;
+  fromClip_ = !record;
   emit poseChanged();
-  if (editDepth_ == 0 && record) emit historyChanged();
+  if (step) emit historyChanged();
 }
 
 void PoseController::setAngles(int joint, const Eigen::Vector3d& degrees) {
   checkJoint(joint);
-  const AngleLimits& l = limits_[std::size_t(joint)];
-  const Eigen::Vector3d clamped = degrees.cwiseMax(l.lower).cwiseMin(l.upper);
+  const std::size_t j = std::size_t(joint);
   State next = state_;
-  next.rotations[std::size_t(joint)] = quaternionFromAngles(clamped);
+  next.rotations[j] = rotationFromAnatomicalAngles(limits_[j].clamp(degrees), classes_[j]);
   apply(next);
 }
 
@@ -132,7 +112,7 @@ void PoseController::rotateInWorld(int joint, const Eigen::Quaterniond& worldDel
   const int p = skeleton_.joints[std::size_t(joint)].parent;
   if (p >= 0) parent = Eigen::Quaterniond(globalTransforms()[std::size_t(p)].rotation());
   const Eigen::Quaterniond local = parent.inverse() * worldDelta * parent * state_.rotations[std::size_t(joint)];
-  setAngles(joint, anglesFromQuaternion(local));
+  setAngles(joint, anatomicalAngles(local, classes_[std::size_t(joint)]));
 }
 
 void PoseController::resetJoint(int joint) {
@@ -174,22 +154,18 @@ void PoseController::endEdit() {
   emit editFinished();
 }
 
-void PoseController::undo() {
-  if (undo_.empty() || editDepth_ > 0) return;
-  redo_.push_back(state_);
-  state_ = undo_.back();
-  undo_.pop_back();
+void PoseController::restore(std::vector<State>& from, std::vector<State>& to) {
+  if (from.empty() || editDepth_ > 0) return;
+  to.push_back(state_);
+  state_ = from.back();
+  from.pop_back();
+  fromClip_ = false;
   emit poseChanged();
   emit historyChanged();
 }
 
-void PoseController::redo() {
-  if (redo_.empty() || editDepth_ > 0) return;
-  undo_.push_back(state_);
-  state_ = redo_.back();
-  redo_.pop_back();
-  emit poseChanged();
-  emit historyChanged();
-}
+void PoseController::undo() { restore(undo_, redo_); }
+
+void PoseController::redo() { restore(redo_, undo_); }
 
 }  // namespace repose

@@ -1,20 +1,38 @@
 #include "preprocess_worker.h"
 
 #include <QDir>
+#include <QFile>
 #include <QFileInfo>
+#include <QJsonDocument>
+#include <QJsonObject>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
 #include <vtkPointData.h>
 
 #include "atomic_outputs.h"
+#include "phantom.h"
 #include "vtkReposeAutoRig.h"
 #include "vtkReposePhantomSource.h"
 
 namespace repose {
 
-LabelTable findCaseLabelTable(const std::string& caseDir) {
+LabelTable phantomLabelTable() {
+  LabelTable table;
+  for (const auto& [value, name] : describePhantom(PhantomSize::Tiny).labelNames)
+    table.labels.push_back({value, name, inferLabelKind(name)});
+  return table;
+}
+
+LabelTable findCaseLabelTable(const std::string& caseDir, const Skeleton& skeleton) {
   const QDir dir(QString::fromStdString(caseDir));
-  for (const QString& candidate : {dir.filePath("labels.tsv"), dir.filePath("../labels.tsv")})
+  QStringList candidates;
+  QFile manifest(dir.filePath("manifest.json"));
+  if (manifest.open(QIODevice::ReadOnly)) {
+    const QString listed = QJsonDocument::fromJson(manifest.readAll()).object().value("labelTable").toString();
+    if (!listed.isEmpty()) candidates << dir.filePath(listed);
+  }
+  candidates << dir.filePath("labels.tsv") << dir.filePath("../labels.tsv");
+  for (const QString& candidate : candidates)
     if (QFileInfo::exists(candidate)) {
       try {
         return readLabelTableFile(candidate.toStdString());
@@ -22,7 +40,14 @@ LabelTable findCaseLabelTable(const std::string& caseDir) {
         // A broken optional table only costs the names.
       }
     }
-  return LabelTable();
+  // A case of the built-in phantom made before cases kept their table: every joint is the phantom's.
+  const Skeleton phantom = describePhantom(PhantomSize::Tiny).skeleton;
+  bool isPhantom = !skeleton.joints.empty();
+  for (const Joint& j : skeleton.joints) {
+    const int p = phantom.find(j.name);
+    isPhantom = isPhantom && p >= 0 && phantom.joints[std::size_t(p)].labels == j.labels;
+  }
+  return isPhantom ? phantomLabelTable() : LabelTable();
 }
 
 PreprocessWorker::PreprocessWorker(const OpenRequest& request, QObject* parent)
@@ -56,7 +81,7 @@ void PreprocessWorker::open() {
     stage("reading the prepared case");
     const std::string dir = request_.caseDir.toStdString();
     pipeline->loadCase(dir);
-    result_.table = findCaseLabelTable(dir);
+    result_.table = findCaseLabelTable(dir, parseSkeletonJson(pipeline->skeletonJson()));
     result_.title = QFileInfo(request_.caseDir).fileName();
   } else if (request_.kind == OpenRequest::Phantom) {
     steps_ = 5 + (save ? 1 : 0);
@@ -124,7 +149,14 @@ void PreprocessWorker::open() {
   }
   if (save) {
     stage("saving the prepared case");
-    pipeline->saveCase(request_.saveCaseDir.toStdString(), labelsExt);
+    const std::string dir = request_.saveCaseDir.toStdString();
+    pipeline->saveCase(dir, labelsExt);
+    // The case keeps its label names (findCaseLabelTable reads them back).
+    if (!result_.table.labels.empty() && !QFileInfo::exists(QDir(request_.saveCaseDir).filePath("labels.tsv"))) {
+      AtomicOutputs out(dir);
+      writeTextFile(out.stage("labels.tsv"), labelTableToTsv(result_.table));
+      out.commit();
+    }
   }
   if (cancelled_) throw Cancelled();
   pipeline->setProgress(nullptr);

@@ -14,6 +14,7 @@
 
 #include "label_table.h"
 #include "repose_pipeline.h"
+#include "skeleton.h"
 
 
 namespace repose {
@@ -62,8 +63,12 @@ private:
   int step_ = 0, steps_ = 1;
 };
 
-/// The label table for a case directory: labels.tsv in it or beside it, else names inferred from
-/// nothing (empty table).
-LabelTable findCaseLabelTable(const std::string& caseDir);
+/// The label table of a case directory: the manifest's "labelTable" (prepare keeps the table it was
+/// given as labels.tsv), else labels.tsv in the case or beside it; for older cases of the built-in
+/// phantom (the skeleton's joints and bone labels are the phantom's) the phantom's names; else an
+/// empty table (labels are then shown as "label N"). A broken table only costs the names.
+LabelTable findCaseLabelTable(const std::string& caseDir, const Skeleton& skeleton);
+/// The built-in phantom's label names.
+LabelTable phantomLabelTable();
 
 }  // namespace repose

@@ -24,15 +24,16 @@
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
-#include <vtkQuadricClustering.h>
-#include <vtkStaticPointLocator.h>
 #include <vtkRegularPolygonSource.h>
 #include <vtkRenderWindowInteractor.h>
 #include <vtkRenderer.h>
 #include <vtkSphereSource.h>
+#include <vtkTextActor.h>
+#include <vtkTextProperty.h>
 #include <vtkWindowToImageFilter.h>
 
 #include "label_colors.h"
+#include "surface_lod.h"
 
 namespace repose {
 
@@ -94,6 +95,11 @@ struct SceneView::Impl {
   double skinOpacity = 0.3;
   bool skinVisible = true;
   double scale = 10;  // mm, joint sphere radius
+  LabelTable table;
+  vtkSmartPointer<vtkTextActor> caption;  // names the picked structure
+  int root = -1;                          // the skeleton's root joint
+  bool hasRootPosition = false;
+  Eigen::Vector3d rootPosition = Eigen::Vector3d::Zero();  // posed root centre of the last pose
 };
 
 SceneView::SceneView(QWidget* parent) : QVTKOpenGLNativeWidget(parent), d_(new Impl) {
@@ -193,6 +199,13 @@ SceneView::SceneView(QWidget* parent) : QVTKOpenGLNativeWidget(parent), d_(new I
     d_->overlay->AddActor(d_->rings[a]);
   }
 
+  d_->caption = vtkSmartPointer<vtkTextActor>::New();
+  d_->caption->GetTextProperty()->SetFontSize(14);
+  d_->caption->GetTextProperty()->SetColor(0.95, 0.95, 0.95);
+  d_->caption->GetTextProperty()->SetShadow(true);
+  d_->caption->SetPosition(8, 8);
+  d_->overlay->AddViewProp(d_->caption);
+
   d_->picker = vtkSmartPointer<vtkCellPicker>::New();
   d_->picker->SetTolerance(0.0005);
   d_->picker->PickFromListOn();
@@ -214,6 +227,12 @@ vtkRenderer* SceneView::renderer() const { return d_->renderer; }
 
 void SceneView::setCase(vtkPolyData* rest, const Skeleton& skeleton, const LabelTable& table) {
   d_->skeleton = skeleton;
+  d_->table = table;
+  d_->root = -1;
+  for (std::size_t j = 0; j < skeleton.size() && d_->root < 0; ++j)
+    if (skeleton.joints[j].parent < 0) d_->root = int(j);
+  d_->hasRootPosition = false;
+  d_->caption->SetInput("");
   d_->global.assign(skeleton.size(), Eigen::Isometry3d::Identity());
   vtkDataArray* labels = rest->GetCellData()->GetArray("Label");
   if (!labels) throw std::runtime_error("the case's surfaces have no cell data 'Label'");
@@ -272,42 +291,13 @@ void SceneView::setCase(vtkPolyData* rest, const Skeleton& skeleton, const Label
   resetCamera();
 }
 
-namespace {
-/// Above this many triangles the interactive display uses a decimated copy (software OpenGL
-/// draws about 1-2 M triangles per second per core).
-constexpr vtkIdType kLodTriangles = 120000;
-
-/// Vertex clustering that keeps input vertices, so the coarse surface follows the posed one by
-/// copying points; `ids` receives the full-surface vertex of every coarse vertex.
-vtkSmartPointer<vtkPolyData> decimateKeepingVertices(vtkPolyData* full, int divisions, std::vector<vtkIdType>& ids) {
-  auto cluster = vtkSmartPointer<vtkQuadricClustering>::New();
-  cluster->SetInputData(full);
-  cluster->UseInputPointsOn();
-  cluster->CopyCellDataOn();
-  cluster->AutoAdjustNumberOfDivisionsOff();
-  double b[6];
-  full->GetBounds(b);
-  const double longest = std::max({b[1] - b[0], b[3] - b[2], b[5] - b[4], 1e-6});
-  int n[3];
-  for (int a = 0; a < 3; ++a) n[a] = std::max(2, int(divisions * (b[2 * a + 1] - b[2 * a]) / longest));
-  cluster->SetNumberOfDivisions(n);
-  cluster->Update();
-  auto coarse = vtkSmartPointer<vtkPolyData>::New();
-  coarse->ShallowCopy(cluster->GetOutput());
-  auto locator = vtkSmartPointer<vtkStaticPointLocator>::New();
-  locator->SetDataSet(full);
-  locator->BuildLocator();
-  ids.resize(std::size_t(coarse->GetNumberOfPoints()));
-  for (vtkIdType i = 0; i < coarse->GetNumberOfPoints(); ++i) ids[std::size_t(i)] = locator->FindClosestPoint(coarse->GetPoint(i));
-  return coarse;
-}
-}  // namespace
-
 void SceneView::buildLod(vtkPolyData* rest, vtkLookupTable* lut, int maxLabel) {
   dropLod();
-  d_->hasLod = rest->GetNumberOfPolys() > kLodTriangles;
+  // Above the threshold the interactive display uses a decimated copy (software OpenGL draws about
+  // 1-2 M triangles per second per core).
+  d_->hasLod = rest->GetNumberOfPolys() > lodThreshold_;
   if (!d_->hasLod) return;
-  // About kLodTriangles / 2 per part: clustering on a grid of `divisions` along the longest side.
+  // About 60 k triangles per part: clustering on a grid of `divisions` along the longest side.
   auto build = [&](Impl::Lod& lod, vtkPolyData* full, vtkActor* like, int divisions) {
     lod.data = decimateKeepingVertices(full, divisions, lod.ids);
     auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
@@ -380,6 +370,9 @@ void SceneView::clearCase() {
   d_->bones->Initialize();
   d_->skeleton = Skeleton();
   d_->global.clear();
+  d_->root = -1;
+  d_->hasRootPosition = false;
+  d_->caption->SetInput("");
   selected_ = -1;
   d_->selectedActor->VisibilityOff();
   for (auto& r : d_->rings) r->VisibilityOff();
@@ -395,6 +388,21 @@ void SceneView::updatePose(vtkPolyData* posed, const std::vector<Eigen::Isometry
     if (interactive_) updateLodPoints();
   }
   if (global.size() == d_->skeleton.size()) d_->global = global;
+  if (d_->root >= 0 && std::size_t(d_->root) < d_->global.size()) {
+    const Eigen::Vector3d r = d_->global[std::size_t(d_->root)] * d_->skeleton.joints[std::size_t(d_->root)].center;
+    if (follow_ && d_->hasRootPosition) {  // the camera moves with the body
+      vtkCamera* camera = d_->renderer->GetActiveCamera();
+      double f[3], p[3];
+      camera->GetFocalPoint(f);
+      camera->GetPosition(p);
+      for (int a = 0; a < 3; ++a) f[a] += r[a] - d_->rootPosition[a], p[a] += r[a] - d_->rootPosition[a];
+      camera->SetFocalPoint(f);
+      camera->SetPosition(p);
+      d_->renderer->ResetCameraClippingRange();
+    }
+    d_->rootPosition = r;
+    d_->hasRootPosition = true;
+  }
   updateSkeletonGeometry();
 }
 
@@ -461,12 +469,31 @@ int SceneView::jointOfLabel(int label) const {
 }
 
 int SceneView::pickJoint(int x, int y) {
-  if (!d_->picker->Pick(x, y, 0, d_->renderer)) return -1;
+  if (!d_->picker->Pick(x, y, 0, d_->renderer)) {
+    d_->caption->SetInput("");
+    return -1;
+  }
   const vtkIdType cell = d_->picker->GetCellId();
   vtkDataSet* picked = d_->picker->GetDataSet();
   vtkDataArray* labels = picked ? picked->GetCellData()->GetArray("Label") : nullptr;
   if (cell < 0 || !labels || cell >= labels->GetNumberOfTuples()) return -1;
-  return jointOfLabel(int(labels->GetTuple1(cell)));
+  const int label = int(labels->GetTuple1(cell));
+  const int joint = jointOfLabel(label);
+  const LabelInfo* info = d_->table.find(label);
+  QString caption = QString("%1 (label %2)").arg(info ? QString::fromStdString(info->name) : QString("label %1").arg(label)).arg(label);
+  if (joint >= 0) caption += ", joint " + QString::fromStdString(d_->skeleton.joints[std::size_t(joint)].name);
+  d_->caption->SetInput(caption.toUtf8().constData());
+  return joint;
+}
+
+QString SceneView::pickedCaption() const {
+  const char* text = d_->caption->GetInput();
+  return text ? QString::fromUtf8(text) : QString();
+}
+
+vtkPolyData* SceneView::interactiveSurface(int which) const {
+  if (!d_->hasLod) return nullptr;
+  return which == 0 ? d_->skinLod.data.Get() : d_->tissueLod.data.Get();
 }
 
 Eigen::Quaterniond SceneView::dragRotation(double dx, double dy) const {

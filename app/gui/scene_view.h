@@ -26,7 +26,7 @@ public:
   ~SceneView() override;
 
   /// Splits the rest surfaces (cell data "Label", -1 = skin) into skin and tissue actors sharing
-  /// the posed points, and builds the skeleton overlay. Resets the camera.
+  /// the posed points, and builds the skeleton overlay. Resets the camera. `table` names the labels.
   void setCase(vtkPolyData* restSurfaces, const Skeleton& skeleton, const LabelTable& table);
   void clearCase();
   /// New posed points (same vertices as the rest surfaces) and joint transforms. Does not render.
@@ -40,6 +40,7 @@ public:
   /// World rotation a mouse drag of (dx, dy) pixels applies (the drag and the benchmark use it).
   Eigen::Quaterniond dragRotation(double dx, double dy) const;
   /// Joint of the bone under display position (x, y) (VTK pixels, origin bottom left), or -1.
+  /// Names the picked structure in the view's caption.
   int pickJoint(int x, int y);
   /// The joint whose bone or surface label is `label`, or -1.
   int jointOfLabel(int label) const;
@@ -50,6 +51,17 @@ public:
   bool interactive() const { return interactive_; }
   /// Triangles drawn while interacting (0: no coarse level, the surfaces are small enough).
   vtkIdType interactiveTriangles() const;
+  /// Surfaces above this many triangles get the coarse level (default 120 000); applies from the
+  /// next setCase().
+  void setLodThreshold(vtkIdType triangles) { lodThreshold_ = triangles; }
+  /// The coarse skin (0) or tissue (1) surface drawn while interacting, or null.
+  vtkPolyData* interactiveSurface(int which) const;
+
+  /// Keep the camera on the body: the view moves by the root joint's displacement between poses.
+  void setCameraFollow(bool follow) { follow_ = follow; }
+  bool cameraFollows() const { return follow_; }
+  /// The caption naming the picked structure ("femur_left (label 75), joint left_hip").
+  QString pickedCaption() const;
 
   void setSkinOpacity(double opacity);
   void setSkeletonVisible(bool visible);
@@ -78,6 +90,8 @@ private:
   Impl* d_;
   int selected_ = -1;
   bool interactive_ = false;
+  bool follow_ = true;
+  vtkIdType lodThreshold_ = 120000;
   friend class SceneInteractorStyle;
 };
 

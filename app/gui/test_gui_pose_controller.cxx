@@ -21,27 +21,73 @@ double angleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 class TestPoseController : public QObject {
   Q_OBJECT
 private slots:
-  void anglesRoundTrip() {
-    for (const Eigen::Vector3d& a : {Eigen::Vector3d(30, -20, 45), Eigen::Vector3d(-120, 80, -170), Eigen::Vector3d(0, 0, 0),
-                                     Eigen::Vector3d(10, -89, 5)}) {
-      const Eigen::Vector3d back = anglesFromQuaternion(quaternionFromAngles(a));
-      QVERIFY2((back - a).norm() < 1e-6, "angles -> quaternion -> angles");
-    }
-    // x first, then y, then z, about fixed axes.
-    const Eigen::Quaterniond q = quaternionFromAngles({90, 0, 0});
-    QVERIFY((q * Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitZ()).norm() < 1e-12);
+  void anglesAreAnatomical() {
+    PoseController c;
+    c.setSkeleton(threeJoints());
+    const int hip = 1, knee = 2;
+    // Hip flexion is positive and swings the thigh forwards (LPS: anterior is -y).
+    c.setAngles(hip, {60, 0, 0});
+    QVERIFY(std::fabs(c.angles(hip).x() - 60) < 1e-9);
+    const Eigen::Vector3d kneeCentre = c.globalTransforms()[hip] * c.skeleton().joints[knee].center;
+    QVERIFY(kneeCentre.y() < -300);
+    // Knee flexion is positive too and swings the shin backwards relative to the thigh.
+    c.resetAll();
+    c.setAngles(knee, {45, 0, 0});
+    const Eigen::Vector3d below = c.skeleton().joints[knee].center + Eigen::Vector3d(0, 0, -100);
+    QVERIFY((c.globalTransforms()[knee] * below).y() > 60);
+    // Abduction of the left hip moves the knee to the patient's left (+x).
+    c.resetAll();
+    c.setAngles(hip, {0, 30, 0});
+    QVERIFY((c.globalTransforms()[hip] * c.skeleton().joints[knee].center).x() > 200);
+    QCOMPARE(c.jointClass(hip).kind, JointKind::Hip);
   }
 
   void limitsClamp() {
     PoseController c;
     c.setSkeleton(threeJoints());
     const int knee = c.skeleton().find("left_knee");
-    const AngleLimits l = c.limits(knee);
+    const JointLimits l = c.limits(knee);
     QVERIFY(l.upper.x() > 90 && l.upper.y() < 45);  // a hinge: wide flexion, little abduction
     c.setAngles(knee, {400, 400, 0});
-    QCOMPARE(c.angles(knee).x(), l.upper.x());
+    QVERIFY(std::fabs(c.angles(knee).x() - l.upper.x()) < 1e-9);
     QVERIFY(std::fabs(c.angles(knee).y() - l.upper.y()) < 1e-9);
     QVERIFY_EXCEPTION_THROWN(c.setAngles(7, {0, 0, 0}), std::invalid_argument);
+  }
+
+  void skeletonChangeComesFirst() {
+    // Views keep joint indices; they must hear of a new skeleton before its first pose.
+    PoseController c;
+    c.setSkeleton(threeJoints());
+    QStringList order;
+    connect(&c, &PoseController::skeletonChanged, [&] { order << "skeleton"; });
+    connect(&c, &PoseController::poseChanged, [&] {
+      order << "pose";
+      for (int j = 0; j < c.jointCount(); ++j) c.angles(j);  // what a joint view does
+    });
+    c.setSkeleton(Skeleton());
+    QCOMPARE(order, QStringList({"skeleton", "pose"}));
+    QCOMPARE(c.jointCount(), 0);
+    c.setSkeleton(threeJoints());
+    QCOMPARE(c.jointCount(), 3);
+  }
+
+  void unsavedAndHandPoses() {
+    PoseController c;
+    c.setSkeleton(threeJoints());
+    QVERIFY(!c.hasUnsavedPose() && !c.isHandPose());
+    c.setAngles(1, {30, 0, 0});
+    QVERIFY(c.hasUnsavedPose() && c.isHandPose());
+    c.markSaved();
+    QVERIFY(!c.hasUnsavedPose() && c.isHandPose());
+    // A clip frame is neither unsaved work nor a hand pose.
+    Pose frame;
+    frame.rotations["left_knee"] = rotationFromEulerAngles({20, 0, 0});
+    c.setPose(frame, false);
+    QVERIFY(!c.hasUnsavedPose() && !c.isHandPose());
+    c.undo();  // back to the hand pose
+    QVERIFY(c.isHandPose());
+    c.resetAll();
+    QVERIFY(!c.isHandPose() && c.hasUnsavedPose());
   }
 
   void undoRedo() {
@@ -108,7 +154,7 @@ private slots:
     PoseController c;
     c.setSkeleton(threeJoints());
     Pose p;
-    p.rotations["left_knee"] = quaternionFromAngles({-60, 0, 0});
+    p.rotations["left_knee"] = rotationFromEulerAngles({-60, 0, 0});
     p.translation = Eigen::Vector3d(5, 0, 0);
     c.setPose(p);
     QCOMPARE(int(c.pose().rotations.size()), 1);

@@ -79,27 +79,45 @@ Pose parsePoseJson(const std::string& text) {
   return pose;
 }
 
-std::string poseToJson(const Pose& pose) {
+// {"rotations": {JOINT: rotation(q)}, "translation": [...]} with `digits` significant digits.
+template <class RotationToJson>
+std::string writePose(const Pose& pose, int digits, RotationToJson rotation) {
   Json::Value root(Json::objectValue);
   Json::Value rotations(Json::objectValue);
-  for (const auto& [name, q] : pose.rotations) {
-    Json::Value quat(Json::arrayValue);
-    quat.append(q.w());
-    quat.append(q.x());
-    quat.append(q.y());
-    quat.append(q.z());
-    Json::Value r(Json::objectValue);
-    r["quaternion"] = quat;
-    rotations[name] = r;
-  }
+  for (const auto& [name, q] : pose.rotations) rotations[name] = rotation(q);
   root["rotations"] = rotations;
   Json::Value t(Json::arrayValue);
   for (int i = 0; i < 3; ++i) t.append(pose.translation[i]);
   root["translation"] = t;
   Json::StreamWriterBuilder writer;
   writer["indentation"] = "  ";
-  writer["precision"] = 17;
+  writer["precision"] = digits;
   return Json::writeString(writer, root) + "\n";
+}
+
+std::string poseToJson(const Pose& pose) {
+  return writePose(pose, 17, [](const Eigen::Quaterniond& q) {
+    Json::Value quat(Json::arrayValue);
+    for (double c : {q.w(), q.x(), q.y(), q.z()}) quat.append(c);
+    Json::Value r(Json::objectValue);
+    r["quaternion"] = quat;
+    return r;
+  });
+}
+
+std::string poseToAxisAngleJson(const Pose& pose) {
+  // Values below the printed precision are written as 0, so a turn about x reads [1, 0, 0].
+  auto clean = [](double v) { return std::fabs(v) < 1e-12 ? 0.0 : v; };
+  return writePose(pose, 12, [&](const Eigen::Quaterniond& q) {
+    const Eigen::AngleAxisd aa(q.normalized());  // angle in [0, pi]
+    const bool none = aa.angle() < 1e-15;
+    Json::Value axis(Json::arrayValue);
+    for (int i = 0; i < 3; ++i) axis.append(none ? double(i == 0) : clean(aa.axis()[i]));
+    Json::Value r(Json::objectValue);
+    r["axis"] = axis;
+    r["degrees"] = none ? 0.0 : clean(aa.angle() * 180.0 / M_PI);
+    return r;
+  });
 }
 
 Pose readPoseFile(const std::string& path) {

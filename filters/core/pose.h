@@ -20,7 +20,11 @@ struct Pose {
 /// "translation":[x,y,z]}. Throws std::invalid_argument on NaN/inf, a zero axis, a zero quaternion
 /// or malformed JSON. Joint names are checked against a skeleton by validatePose.
 Pose parsePoseJson(const std::string& text);
+/// Exact (quaternions, 17 digits): for passing a pose between programs.
 std::string poseToJson(const Pose& pose);
+/// For a person to read and edit: every rotation as {"axis": [x,y,z] (unit), "degrees": a} with a in
+/// [0, 180], 12 significant digits (parsePoseJson reads it back to 1e-10 degrees).
+std::string poseToAxisAngleJson(const Pose& pose);
 Pose readPoseFile(const std::string& path);
 /// Throws std::invalid_argument if the pose names a joint the skeleton does not have.
 void validatePose(const Pose& pose, const Skeleton& skeleton);

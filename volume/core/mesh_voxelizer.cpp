@@ -1,14 +1,11 @@
 #include "mesh_voxelizer.h"
 
 #include <Eigen/Geometry>
-#include <Eigen/LU>
-#include <openvdb/openvdb.h>
-#include <openvdb/tools/MeshToVolume.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <map>
 #include <mutex>
 #include <set>
@@ -16,26 +13,11 @@
 #include <stdexcept>
 
 #include "parallel_for.h"
+#include "winding_inside.h"
+#include "winding_number.h"
 
 namespace repose {
 namespace {
-
-void initializeOpenVdb() {
-  static std::once_flag once;
-  std::call_once(once, [] { openvdb::initialize(); });
-}
-
-/// Triangles with their vertices already in the grid's continuous index space.
-struct IndexSpaceTriangles {
-  const std::vector<openvdb::Vec3d>* points;
-  const MeshTriangles* F;
-  std::size_t polygonCount() const { return std::size_t(F->rows()); }
-  std::size_t pointCount() const { return points->size(); }
-  std::size_t vertexCount(std::size_t) const { return 3; }
-  void getIndexSpacePoint(std::size_t n, std::size_t v, openvdb::Vec3d& pos) const {
-    pos = (*points)[std::size_t((*F)(Eigen::Index(n), int(v)))];
-  }
-};
 
 void checkGrid(const ImageGrid& grid) {
   if (grid.dims[0] <= 0 || grid.dims[1] <= 0 || grid.dims[2] <= 0)
@@ -68,73 +50,97 @@ std::string percent(double f) {
   return s.str();
 }
 
-}  // namespace
-
-namespace {
-
-/// Index box of points in the grid's index space, clipped to the grid; false when empty.
-bool indexBox(const std::vector<openvdb::Vec3d>& points, const ImageGrid& grid, std::array<int, 3>& boxMin,
-              std::array<int, 3>& boxDims, bool* cut = nullptr) {
-  openvdb::Vec3d lo(INFINITY), hi(-INFINITY);
-  for (const auto& p : points)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
-  bool empty = false;
-  for (int a = 0; a < 3; ++a) {
-    const int first = std::max(0, int(std::ceil(lo[a])));
-    const int last = std::min(grid.dims[a] - 1, int(std::floor(hi[a])));
-    if (cut && (lo[a] < -0.5 || hi[a] > grid.dims[a] - 0.5)) *cut = true;
-    boxMin[a] = first;
-    boxDims[a] = std::max(0, last - first + 1);
-    empty |= boxDims[a] == 0;
-  }
-  return !empty;
+/// A volume for people: "3.86 ml", "460.1 ml", "79.29 L".
+std::string volumeText(double mm3) {
+  std::ostringstream s;
+  s << std::fixed;
+  if (mm3 >= 1e6)
+    s << std::setprecision(2) << mm3 / 1e6 << " L";
+  else
+    s << std::setprecision(mm3 < 1e4 ? 2 : 1) << mm3 / 1000.0 << " ml";
+  return s.str();
 }
 
-/// Calls visit(offset in the outer box, inside) for every voxel of `box` (inside the outer box) where
-/// the level set of the triangles is negative. Threaded over slices; visit must be thread-safe per voxel.
-template <class Visit>
-void forInsideVoxels(const std::vector<openvdb::Vec3d>& points, const MeshTriangles& F, float band,
-                     const std::array<int, 3>& boxMin, const std::array<int, 3>& boxDims,
-                     const std::array<int, 3>& outerMin, const std::array<int, 3>& outerDims, Visit visit) {
-  initializeOpenVdb();
-  const IndexSpaceTriangles mesh{&points, &F};
-  auto transform = openvdb::math::Transform::createLinearTransform(1.0);
-  openvdb::FloatGrid::Ptr sdf = openvdb::tools::meshToVolume<openvdb::FloatGrid>(mesh, *transform, band, band);
-  const std::size_t nx = std::size_t(outerDims[0]), ny = std::size_t(outerDims[1]);
-  parallelFor(
-      std::size_t(boxDims[2]),
-      [&](std::size_t k0, std::size_t k1) {
-        auto acc = sdf->getConstAccessor();
-        for (std::size_t k = k0; k < k1; ++k)
-          for (int j = 0; j < boxDims[1]; ++j)
-            for (int i = 0; i < boxDims[0]; ++i) {
-              const openvdb::Coord c(boxMin[0] + i, boxMin[1] + j, boxMin[2] + int(k));
-              if (acc.getValue(c) < 0.0f)
-                visit((std::size_t(c.z() - outerMin[2]) * ny + std::size_t(c.y() - outerMin[1])) * nx +
-                      std::size_t(c.x() - outerMin[0]));
-            }
-      },
-      1);
-}
-
-double signedVolume(const MeshVertices& V, const MeshTriangles& F) {
-  const Eigen::RowVector3d c = V.colwise().mean();
-  double six = 0;
+/// Signed volume of each piece (about the piece's own centroid): positive when it faces outward.
+std::vector<double> pieceVolumes(const MeshVertices& V, const MeshTriangles& F, const std::vector<int>& piece,
+                                 std::size_t pieces) {
+  std::vector<Eigen::Vector3d> centroid(pieces, Eigen::Vector3d::Zero());
+  std::vector<double> corners(pieces, 0), six(pieces, 0);
+  for (Eigen::Index t = 0; t < F.rows(); ++t)
+    for (int c = 0; c < 3; ++c) centroid[std::size_t(piece[std::size_t(t)])] += V.row(F(t, c)).transpose();
+  for (Eigen::Index t = 0; t < F.rows(); ++t) corners[std::size_t(piece[std::size_t(t)])] += 3;
+  for (std::size_t p = 0; p < pieces; ++p) centroid[p] /= std::max(1.0, corners[p]);
   for (Eigen::Index t = 0; t < F.rows(); ++t) {
-    const Eigen::Vector3d a = (V.row(F(t, 0)) - c).transpose(), b = (V.row(F(t, 1)) - c).transpose(),
-                          d = (V.row(F(t, 2)) - c).transpose();
-    six += a.dot(b.cross(d));
+    const Eigen::Vector3d& c = centroid[std::size_t(piece[std::size_t(t)])];
+    const Eigen::Vector3d a = V.row(F(t, 0)).transpose() - c, b = V.row(F(t, 1)).transpose() - c,
+                          d = V.row(F(t, 2)).transpose() - c;
+    six[std::size_t(piece[std::size_t(t)])] += a.dot(b.cross(d));
   }
-  return six / 6.0;
+  for (double& x : six) x /= 6.0;
+  return six;
 }
 
-std::vector<openvdb::Vec3d> toIndexSpace(const MeshVertices& V, const ImageGrid& grid) {
-  std::vector<openvdb::Vec3d> points(std::size_t(V.rows()));
-  for (Eigen::Index v = 0; v < V.rows(); ++v) {
-    const Eigen::Vector3d p = grid.physicalToIndex(V.row(v).transpose());
-    points[std::size_t(v)] = openvdb::Vec3d(p.x(), p.y(), p.z());
+/// The soup's triangles oriented so that the winding number counts the inside (see voxelizeMesh).
+struct OrientedSoup {
+  MeshTriangles F;
+  OrientationRepairs repairs;
+};
+
+void flip(MeshTriangles& F, Eigen::Index t) { std::swap(F(t, 1), F(t, 2)); }
+
+/// Whether each listed inward piece lies inside the other pieces (a cavity) rather than beside them:
+/// the others' winding number, w of the whole soup minus the piece's own (exact) part, is at least
+/// 1/2 at most of its vertices (16 sampled).
+std::vector<bool> insideOthers(const MeshVertices& V, const MeshTriangles& F, const std::vector<int>& piece,
+                               const std::vector<std::size_t>& inward) {
+  const WindingNumberTree tree(V, F);
+  std::vector<std::vector<Eigen::Index>> trianglesOf(*std::max_element(inward.begin(), inward.end()) + 1);
+  for (Eigen::Index t = 0; t < F.rows(); ++t) {
+    const std::size_t p = std::size_t(piece[std::size_t(t)]);
+    if (p < trianglesOf.size()) trianglesOf[p].push_back(t);
   }
-  return points;
+  std::vector<bool> cavity;
+  for (std::size_t p : inward) {
+    const std::vector<Eigen::Index>& tris = trianglesOf[p];
+    MeshTriangles own(Eigen::Index(tris.size()), 3);
+    for (std::size_t n = 0; n < tris.size(); ++n) own.row(Eigen::Index(n)) = F.row(tris[n]);
+    const std::size_t samples = std::min<std::size_t>(16, tris.size()), step = tris.size() / samples;
+    std::size_t enclosed = 0;
+    for (std::size_t n = 0; n < samples; ++n) {
+      const Eigen::Vector3d q = V.row(own(Eigen::Index(n * step), 0)).transpose();
+      enclosed += tree(q) - windingNumberExact(V, own, q) >= 0.5;
+    }
+    cavity.push_back(2 * enclosed > samples);
+  }
+  return cavity;
+}
+
+OrientedSoup orientPieces(const MeshVertices& V, const MeshTriangles& mixed) {
+  OrientedSoup out;
+  out.F = consistentlyOriented(V, mixed, out.repairs.trianglesTurned);
+  std::size_t pieces = 0;
+  const std::vector<int> piece = meshPieces(V, out.F, pieces);
+  std::vector<double> volume = pieceVolumes(V, out.F, piece, pieces);
+  auto smaller = [](double a, double b) { return std::abs(a) < std::abs(b); };
+  const std::size_t largest = std::size_t(std::max_element(volume.begin(), volume.end(), smaller) - volume.begin());
+  if (volume[largest] < 0) {
+    out.repairs.turnedOutward = true;
+    for (Eigen::Index t = 0; t < out.F.rows(); ++t) flip(out.F, t);
+    for (double& v : volume) v = -v;
+  }
+  std::vector<std::size_t> inward;
+  for (std::size_t p = 0; p < pieces; ++p)
+    if (volume[p] < 0) inward.push_back(p);
+  if (inward.empty()) return out;
+  const std::vector<bool> cavity = insideOthers(V, out.F, piece, inward);
+  std::vector<bool> turn(pieces, false);
+  for (std::size_t n = 0; n < inward.size(); ++n) {
+    turn[inward[n]] = !cavity[n];
+    (cavity[n] ? out.repairs.cavities : out.repairs.invertedPieces) += 1;
+  }
+  for (Eigen::Index t = 0; t < out.F.rows(); ++t)
+    if (turn[std::size_t(piece[std::size_t(t)])]) flip(out.F, t);
+  return out;
 }
 
 }  // namespace
@@ -143,62 +149,13 @@ MeshVoxelization voxelizeMesh(const MeshVertices& V, const MeshTriangles& F, con
                               const MeshVoxelizeOptions& options) {
   checkGrid(grid);
   checkMesh(V, F);
-  if (!(options.bandVoxels >= 1.0)) throw std::invalid_argument("the narrow band must be at least one voxel wide");
   MeshVoxelization r;
   r.topology = analyzeMeshTopology(V, F);  // also checks the indices
-  const float band = float(options.bandVoxels);
-  const std::vector<openvdb::Vec3d> points = toIndexSpace(V, grid);
-  if (!indexBox(points, grid, r.boxMin, r.boxDims, &r.cutByGrid)) {
-    r.boxDims = {0, 0, 0};
-    return r;
-  }
-  const std::size_t n = std::size_t(r.boxDims[0]) * r.boxDims[1] * r.boxDims[2];
-  r.inside.assign(n, 0);
-  if (r.topology.components <= 1) {
-    forInsideVoxels(points, F, band, r.boxMin, r.boxDims, r.boxMin, r.boxDims,
-                    [&](std::size_t o) { r.inside[o] = 1; });
-  } else {
-    // OpenVDB fills everything the outside cannot reach, which would fill a cavity (a skull's inner
-    // surface). So each piece is a level set of its own, counted +1 when it faces the way the largest
-    // piece faces and -1 (a cavity) when it faces the other way and lies inside the others; a voxel is
-    // inside when the count is positive. Overlapping pieces then make a union, nested ones a shell.
-    const std::vector<TriangleMesh> pieces = splitConnectedComponents(V, F);
-    std::vector<double> volume(pieces.size());
-    std::size_t largest = 0;
-    for (std::size_t c = 0; c < pieces.size(); ++c) {
-      volume[c] = signedVolume(pieces[c].V, pieces[c].F);
-      if (std::abs(volume[c]) > std::abs(volume[largest])) largest = c;
-    }
-    const double outward = volume[largest] >= 0 ? 1.0 : -1.0;
-    std::vector<std::int16_t> count(n, 0);
-    std::vector<std::size_t> opposite;
-    for (std::size_t c = 0; c < pieces.size(); ++c) {
-      if (volume[c] * outward < 0) {
-        opposite.push_back(c);
-        continue;
-      }
-      const auto pts = toIndexSpace(pieces[c].V, grid);
-      std::array<int, 3> bmin, bdims;
-      if (indexBox(pts, grid, bmin, bdims))
-        forInsideVoxels(pts, pieces[c].F, band, bmin, bdims, r.boxMin, r.boxDims, [&](std::size_t o) { ++count[o]; });
-    }
-    for (std::size_t c : opposite) {
-      const auto pts = toIndexSpace(pieces[c].V, grid);
-      std::array<int, 3> bmin, bdims;
-      if (!indexBox(pts, grid, bmin, bdims)) continue;
-      std::vector<std::uint8_t> mask(n, 0);
-      forInsideVoxels(pts, pieces[c].F, band, bmin, bdims, r.boxMin, r.boxDims, [&](std::size_t o) { mask[o] = 1; });
-      std::size_t total = 0, nested = 0;
-      for (std::size_t o = 0; o < n; ++o)
-        if (mask[o]) ++total, nested += count[o] > 0;
-      const bool cavity = total > 0 && double(nested) >= 0.95 * double(total);
-      (cavity ? r.cavities : r.invertedPieces) += 1;
-      for (std::size_t o = 0; o < n; ++o)
-        if (mask[o]) count[o] = std::int16_t(count[o] + (cavity ? -1 : 1));
-    }
-    for (std::size_t o = 0; o < n; ++o) r.inside[o] = count[o] > 0;
-  }
-  r.insideVoxels = std::size_t(std::count(r.inside.begin(), r.inside.end(), std::uint8_t(1)));
+  const OrientedSoup soup = orientPieces(V, F);
+  r.repairs = soup.repairs;
+  WindingInsideOptions o;
+  o.holeReach = options.holeReach;
+  static_cast<WindingInside&>(r) = insideByWindingNumber(V, soup.F, grid, o);
   return r;
 }
 
@@ -232,6 +189,37 @@ ImageGrid gridFittingPoints(const MeshVertices& V, double voxelMm, double padVox
   return g;
 }
 
+namespace {
+
+/// What was put right in a part, or "closed".
+std::string repairs(const VoxelizedPart& p) {
+  const MeshTopology& t = p.topology;
+  std::ostringstream s;
+  s << std::fixed;
+  if (t.holes > 0)
+    s << t.holes << " hole(s) spanned (" << t.boundaryEdges << " boundary edges, the largest " << std::setprecision(1)
+      << t.largestHole << " mm across; mean winding number inside " << std::setprecision(2) << p.meanInsideWinding
+      << "), ";
+  if (t.pieces > 1) {
+    s << t.pieces << " pieces";
+    if (p.overlapVolume > 0) s << " overlapping in " << volumeText(p.overlapVolume) << ", united";
+    s << ", ";
+  }
+  if (t.pieces <= 1 && p.overlapVolume > 0)
+    s << "folded over itself in " << volumeText(p.overlapVolume) << ", counted once, ";
+  if (t.nonManifoldEdges > 0) s << t.nonManifoldEdges << " non-manifold edges, ";
+  const OrientationRepairs& o = p.repairs;
+  if (o.trianglesTurned > 0) s << o.trianglesTurned << " triangles turned to agree with their neighbours, ";
+  if (o.turnedOutward) s << "turned outward (it faced inward), ";
+  if (o.cavities > 0) s << o.cavities << " cavities carved, ";
+  if (o.invertedPieces > 0) s << o.invertedPieces << " inward pieces turned outward, ";
+  std::string out = s.str();
+  if (out.empty()) return "closed";
+  return out.substr(0, out.size() - 2);
+}
+
+}  // namespace
+
 std::string LabelVoxelization::text() const {
   std::ostringstream s;
   const auto& g = labels.grid;
@@ -240,16 +228,62 @@ std::string LabelVoxelization::text() const {
     << g.origin.z() << ")\n";
   for (const auto& p : parts) {
     s << "  " << p.label << " " << p.name << " (" << roleName(p.role) << ", " << (p.source.empty() ? p.name : p.source)
-      << "): " << p.topology.triangles << " triangles, " << p.topology.boundaryEdges << " boundary edges, " << p.voxels
-      << " voxels (" << p.voxelVolume / 1000.0 << " ml";
-    if (p.topology.boundaryEdges == 0 && p.topology.enclosedVolume > 0)
-      s << ", mesh " << p.topology.enclosedVolume / 1000.0 << " ml";
-    if (p.cavities > 0) s << ", " << p.cavities << " cavities carved";
-    s << ")\n";
+      << "): " << p.topology.triangles << " triangles, " << repairs(p) << ": " << p.voxels << " voxels, "
+      << volumeText(p.voxelVolume) << " (the mesh encloses " << (p.topology.holes > 0 ? "about " : "")
+      << volumeText(p.topology.enclosedVolume) << "); " << std::fixed << std::setprecision(2) << p.seconds << " s\n"
+      << std::defaultfloat;
   }
   for (const auto& w : warnings) s << "warning: " << w << "\n";
   return s.str();
 }
+
+namespace {
+
+/// The part's report from its voxelization; throws when it has no inside worth the name, adds warnings.
+VoxelizedPart judge(const VoxelizePart& p, const MeshVoxelization& m, double voxelVolume,
+                    std::vector<std::string>& warnings) {
+  VoxelizedPart rep;
+  rep.name = p.name;
+  rep.source = p.source;
+  rep.role = p.role;
+  rep.voxels = m.insideVoxels;
+  rep.voxelVolume = double(m.insideVoxels) * voxelVolume;
+  rep.overlapVolume = double(m.overlapVoxels) * voxelVolume;
+  rep.meanInsideWinding = m.meanInsideWinding;
+  rep.topology = m.topology;
+  rep.cutByGrid = m.cutByGrid;
+  rep.repairs = m.repairs;
+  const std::string at = where(p);
+  const MeshTopology& t = m.topology;
+  if (m.outsideGrid) throw std::invalid_argument(at + ": the surface lies outside the voxel grid");
+  if (t.boundaryEdges > 0 && (m.insideVoxels == 0 || m.meanInsideWinding < kMinInsideWinding)) {
+    std::ostringstream e;
+    e << std::fixed << at << ": the surface is not closed enough to have an inside (" << t.holes << " hole(s), "
+      << t.boundaryEdges << " boundary edges, the largest hole " << std::setprecision(1) << t.largestHole
+      << " mm across): ";
+    if (m.insideVoxels == 0)
+      e << "nothing has a winding number of 1/2 or more";
+    else
+      e << "its winding number inside averages " << std::setprecision(2) << m.meanInsideWinding
+        << " where a closed surface has 1";
+    e << "; close the holes or give a closed surface";
+    throw std::invalid_argument(e.str());
+  }
+  if (m.insideVoxels == 0)
+    throw std::invalid_argument(at + ": the surface encloses no voxel centre (thinner than a voxel?)");
+  const double ratio = t.enclosedVolume > 0 ? (rep.voxelVolume + rep.overlapVolume) / t.enclosedVolume : 0.0;
+  if (t.closed() && m.repairs.cavities == 0 && m.insideVoxels > 1000 && (ratio < 0.7 || ratio > 1.4))
+    warnings.push_back(at + ": the inside (" + volumeText(rep.voxelVolume) +
+                       ") differs from the volume the surface encloses (" + volumeText(t.enclosedVolume) +
+                       "): thinner than a few voxels?");
+  if (m.repairs.invertedPieces > 0)
+    warnings.push_back(at + ": " + std::to_string(m.repairs.invertedPieces) +
+                       " piece(s) face inward but lie outside the others: turned outward, kept as solids");
+  if (m.cutByGrid) warnings.push_back(at + ": the surface reaches beyond the voxel grid and is cut by it");
+  return rep;
+}
+
+}  // namespace
 
 LabelVoxelization voxelizeLabels(const std::vector<VoxelizePart>& parts, const ImageGrid& gridIn,
                                  const LabelVoxelizeOptions& options) {
@@ -267,7 +301,7 @@ LabelVoxelization voxelizeLabels(const std::vector<VoxelizePart>& parts, const I
     }
     try {
       checkMesh(p.V, p.F);
-      analyzeMeshTopology(p.V, p.F);
+      checkTriangleIndices(p.V, p.F);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(where(p) + ": " + e.what());
     }
@@ -305,54 +339,16 @@ LabelVoxelization voxelizeLabels(const std::vector<VoxelizePart>& parts, const I
     const VoxelizePart& p = *order[n];
     const int label = int(n) + 1;
     MeshVoxelization m;
+    const auto started = std::chrono::steady_clock::now();
     try {
       m = voxelizeMesh(p.V, p.F, grid, options.mesh);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(where(p) + ": " + e.what());
     }
-    VoxelizedPart rep;
-    rep.name = p.name;
-    rep.source = p.source;
-    rep.role = p.role;
+    VoxelizedPart rep = judge(p, m, voxelVolume, out.warnings);
     rep.label = label;
-    rep.voxels = m.insideVoxels;
-    rep.voxelVolume = double(m.insideVoxels) * voxelVolume;
-    rep.topology = m.topology;
-    rep.cutByGrid = m.cutByGrid;
-    rep.cavities = m.cavities;
-    rep.invertedPieces = m.invertedPieces;
+    rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     const std::string at = where(p);
-    // A hole wider than about a voxel lets OpenVDB's outside flood fill in: the inside collapses to a
-    // few stray voxels, far below what the surface encloses.
-    const double enclosed = m.topology.enclosedVolume;
-    const double ratio = enclosed > 0 ? rep.voxelVolume / enclosed : 0.0;
-    if (m.boxDims[0] == 0) throw std::invalid_argument(at + ": the surface lies outside the voxel grid");
-    if (!m.topology.closed() && (m.insideVoxels == 0 || ratio < 0.5)) {
-      std::ostringstream e;
-      e << at << ": the surface is not closed enough to have an inside (" << m.topology.boundaryEdges
-        << " boundary edges; its holes let the outside in: " << rep.voxelVolume / 1000.0 << " ml inside of about "
-        << enclosed / 1000.0 << " ml enclosed)";
-      throw std::invalid_argument(e.str());
-    }
-    if (m.insideVoxels == 0)
-      throw std::invalid_argument(at + ": the surface encloses no voxel centre (thinner than a voxel?)");
-    if (!m.topology.closed()) {
-      std::ostringstream w;
-      w << at << ": the surface is not closed (" << m.topology.boundaryEdges << " boundary edges, "
-        << m.topology.nonManifoldEdges << " non-manifold edges); its inside was taken from the level set's sign: "
-        << rep.voxelVolume / 1000.0 << " ml of about " << enclosed / 1000.0 << " ml enclosed";
-      out.warnings.push_back(w.str());
-    }
-    if (m.topology.closed() && m.insideVoxels > 1000 && (ratio < 0.7 || ratio > 1.4)) {
-      std::ostringstream w;
-      w << at << ": the inside (" << rep.voxelVolume / 1000.0 << " ml) differs from the volume the surface encloses ("
-        << enclosed / 1000.0 << " ml): overlapping or inverted pieces?";
-      out.warnings.push_back(w.str());
-    }
-    if (m.invertedPieces > 0)
-      out.warnings.push_back(at + ": " + std::to_string(m.invertedPieces) +
-                             " piece(s) face inward but lie outside the others: kept as solids");
-    if (m.cutByGrid) out.warnings.push_back(at + ": the surface reaches beyond the voxel grid and is cut by it");
 
     // Paint: bones over tissues over skin; the first of two bones (or tissues) keeps a shared voxel.
     std::size_t outside = 0;

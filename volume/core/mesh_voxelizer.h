@@ -1,7 +1,9 @@
 #pragma once
-// Closed surface meshes -> voxels: each surface becomes a narrow-band signed distance field with
-// OpenVDB (meshToVolume), whose sign says which voxel centres are inside; surfaces of skin, bones and
-// other tissues are then combined into one label volume.
+// Surface meshes -> voxels. A voxel is inside a surface when the surface's generalized winding
+// number at its centre is at least 1/2 (winding_number.h, winding_inside.h), which takes surfaces
+// as they come: holes are spanned, overlapping closed pieces make their union, inward pieces inside
+// others are cavities. Surfaces of skin, bones and other tissues are then combined into one label
+// volume, with a report of what was repaired.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -11,26 +13,28 @@
 #include "image_grid.h"
 #include "label_table.h"
 #include "mesh_topology.h"
+#include "winding_inside.h"
 
 namespace repose {
 
 struct MeshVoxelizeOptions {
-  /// Narrow band each side of the surface (voxels). OpenVDB decides inside/outside by flood-filling
-  /// the outside sign through this band, so holes narrower than about the band are bridged and
-  /// self-intersections and inconsistent orientation do not matter; wider holes let the outside in.
-  double bandVoxels = 3.0;
+  /// Near each hole the winding number is evaluated within this many times the hole's radius of
+  /// its middle (WindingInsideOptions::holeReach, at least 2); larger only costs time.
+  double holeReach = 2.0;
+};
+
+/// What putting the orientation right changed (see voxelizeMesh).
+struct OrientationRepairs {
+  std::size_t trianglesTurned = 0;  ///< turned to agree with their neighbours (mixed windings)
+  bool turnedOutward = false;       ///< the whole surface faced inward and was turned
+  std::size_t cavities = 0;         ///< pieces facing inward inside other pieces: carved out
+  std::size_t invertedPieces = 0;   ///< pieces facing inward but not inside others: turned outward
 };
 
 /// Voxels of `grid` whose centres lie inside one surface, stored over the index box of the surface
-/// clipped to the grid (nothing outside that box is inside).
-struct MeshVoxelization {
-  std::array<int, 3> boxMin{0, 0, 0};   ///< first voxel index of the box
-  std::array<int, 3> boxDims{0, 0, 0};  ///< voxels along i, j, k (0 when the surface misses the grid)
-  std::vector<std::uint8_t> inside;     ///< boxDims product, i fastest; 1 = inside
-  std::size_t insideVoxels = 0;
-  bool cutByGrid = false;               ///< the surface reaches beyond the grid
-  std::size_t cavities = 0;             ///< pieces facing inward inside other pieces: carved out
-  std::size_t invertedPieces = 0;       ///< pieces facing inward but not inside others: kept as solids
+/// clipped to the grid (nothing outside that box is inside), with the counts of WindingInside.
+struct MeshVoxelization : WindingInside {
+  OrientationRepairs repairs;
   MeshTopology topology;
   /// Grid voxel (i,j,k) inside?
   bool at(int i, int j, int k) const {
@@ -41,12 +45,13 @@ struct MeshVoxelization {
 };
 
 /// Voxelizes one triangle soup (V #V by 3 physical LPS mm, F #F by 3) on `grid` (any origin,
-/// spacing, direction): the surface is taken into the grid's continuous index space, converted to a
-/// level set there (distances in voxel units), and a voxel is inside when the level set is negative
-/// at its centre. Threaded over slices. Does not judge closedness: see voxelizeLabels.
-/// A soup of several pieces (connected components) is a union of the pieces, except that a piece
-/// oriented against the largest one and lying inside the others is a cavity (the inner surface of a
-/// skull or a hollow bone) and is carved out: orientation matters only between pieces.
+/// spacing, direction): a voxel is inside when the soup's winding number at its centre is at least
+/// 1/2. Orientation is put right first: triangles are turned to agree with their neighbours
+/// (consistentlyOriented); then, piece by piece (meshPieces), a soup whose largest piece faces
+/// inward is turned, and a piece facing against the largest one is a cavity when it lies inside
+/// the others (a skull's inner table, a hollow bone: carved out) and is turned outward otherwise.
+/// Holes are spanned (WindingInside::meanInsideWinding says how well). Does not judge: see voxelizeLabels.
+/// Threaded; the result does not depend on the number of threads.
 /// Throws std::invalid_argument on an empty mesh, a bad index, a non-finite vertex or an empty grid.
 MeshVoxelization voxelizeMesh(const MeshVertices& V, const MeshTriangles& F, const ImageGrid& grid,
                               const MeshVoxelizeOptions& options = {});
@@ -82,8 +87,11 @@ struct VoxelizedPart {
   double voxelVolume = 0;          ///< voxels x voxel volume (mm^3)
   MeshTopology topology;
   double outsideSkinFraction = 0;  ///< bones and tissues: fraction of their voxels outside the skin
+  double overlapVolume = 0;        ///< mm^3 inside two of its pieces or more
+  double meanInsideWinding = 0;    ///< see WindingInside
   bool cutByGrid = false;
-  std::size_t cavities = 0, invertedPieces = 0;  ///< see MeshVoxelization
+  OrientationRepairs repairs;
+  double seconds = 0;              ///< voxelizing it (wall time)
 };
 
 struct LabelVoxelization {
@@ -96,13 +104,18 @@ struct LabelVoxelization {
   std::string text() const;
 };
 
+/// Below this mean winding number inside (1 for a closed surface, 0.5 for an open sheet) a surface
+/// is too open to have an inside.
+constexpr double kMinInsideWinding = 0.75;
+
 /// One label volume from one skin and any number of bones and tissues: the skin's interior gets the
 /// skin's label (soft tissue), each bone and tissue its own; where they overlap bones win over
 /// tissues over skin (between two bones, or two tissues, the first given). The grid is `grid` when
-/// its dims are non-zero, else gridFittingPoints(skin, options). A surface that encloses no voxel is
-/// an error (open with holes wider than the band, or smaller than a voxel); a surface with holes or
-/// non-manifold edges that still encloses voxels, a bone or tissue partly outside the skin (kept in
-/// the body anyway) and overlapping bones are warnings.
+/// its dims are non-zero, else gridFittingPoints(skin, options). Holes, overlapping pieces, cavities
+/// and inward pieces are repaired and reported in text(). A surface too open to have an inside (its
+/// inside voxels' mean winding number below kMinInsideWinding: an open sheet, a bowl) or that
+/// encloses no voxel centre is an error; a bone or tissue partly outside the skin (kept in the body
+/// anyway), overlapping bones and a surface cut by the grid are warnings.
 /// Throws std::invalid_argument "SOURCE: problem" on bad input, no or several skins, duplicate
 /// names, or a grid above options.maxVoxels.
 LabelVoxelization voxelizeLabels(const std::vector<VoxelizePart>& parts, const ImageGrid& grid,
