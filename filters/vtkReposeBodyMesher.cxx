@@ -165,7 +165,23 @@ int vtkReposeBodyMesher::RequestData(
       this->NumberOfContactVoxelsCut = static_cast<vtkIdType>(meshing.contacts.voxelsCut);
       this->ContactReport = meshing.contacts.text(skeleton);
       const auto& mg = meshing.mesh.body.grid;
-      report << "body mask: " << meshing.bodyVoxels << " voxels, " << meshing.peeledVoxels << " after "
+      report << "body mask: " << meshing.bodyVoxels << " voxels";
+      if (meshing.closedMm > 0)
+      {
+        report << " (the labels alone make the body: closed by " << meshing.closedMm << " mm)";
+      }
+      report << ", " << meshing.components.kept << " piece(s) with bone";
+      if (meshing.components.bridged > 0)
+      {
+        report << ", " << meshing.components.bridged << " without bone bridged to them ("
+               << meshing.components.bridgeVoxels << " bridge voxels)";
+      }
+      if (meshing.components.dropped > 0)
+      {
+        report << ", " << meshing.components.dropped << " dropped (" << meshing.components.droppedVoxels
+               << " voxels: no bone and too small or too far to bridge)";
+      }
+      report << "; " << meshing.peeledVoxels << " after "
              << (maskOptions.skinLabels.empty() ? "peeling the outer layer"
                                                 : "removing " + std::to_string(meshing.skinVoxelsRemoved) +
                                                     " skin voxels")
@@ -239,14 +255,14 @@ int vtkReposeBodyMesher::RequestData(
     report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
            << " s)\n";
     this->TetGenSeconds = tetReport.seconds;
-    // The budget's prediction is a fit: where TetGen overshoots it by a fifth, mesh once more on a
-    // coarser grid (tets go about as 1 / spacing^2).
-    if (meshing.spacing.trials > 0 && tetReport.tets > 1.2 * static_cast<double>(this->MaxTets))
+    // The budget's prediction is a fit: where TetGen exceeds the budget by a tenth, choose again
+    // with the tets per surface point this body has shown, and mesh once more.
+    if (meshing.spacing.trials > 0 && tetReport.tets > 1.1 * static_cast<double>(this->MaxTets))
     {
-      maskOptions.meshSpacingMm =
-        meshing.spacing.spacingMm * std::sqrt(tetReport.tets / (0.93 * static_cast<double>(this->MaxTets)));
-      report << "over the budget of " << this->MaxTets << " tets: meshing again at " << maskOptions.meshSpacingMm
-             << " mm\n";
+      maskOptions.tetsPerPoint =
+        1.02 * tetReport.tets / static_cast<double>(meshing.spacing.surfaceFaces + meshing.spacing.seeds);
+      report << "over the budget of " << this->MaxTets << " tets (" << maskOptions.tetsPerPoint
+             << " tets per surface point): meshing again\n";
       mesh = meshBody();
       report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
              << " s)\n";

@@ -28,6 +28,9 @@ constexpr int kGapReach = 3;
 constexpr double kJointGuard = 1.5;
 // Free skin must be this many voxels nearer than the crease to keep a boundary voxel.
 constexpr double kMargin = 1.0;
+// Largest shift (mm) of a contact's boundary toward one part: where two parts truly meet, it is the
+// difference of their depths over their bones (a hand on a thigh: about 35 mm).
+constexpr double kMaxShiftMm = 60.0;
 // |cos| of the angle between a line across a slit and the axis of a child bone lying against its
 // parent, at most: 0.5 = within 30 degrees of square to it.
 constexpr double kAcrossAxis = 0.5;
@@ -175,37 +178,39 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
   const NearestBones nb = nearestBones(body, bone);
   std::vector<std::int16_t> seg(nb.first);
 
-  // Contacts: the two bones nearest each crease voxel (through the tissue beside it), and how much
-  // nearer the one is than the other there: their boundary must pass through the crease.
+  // Contacts: the parts on the two sides of each crease voxel, and how much nearer the one's bone is
+  // than the other's there: their boundary must pass through the crease. A side's part is its
+  // nearest bone; where both sides have the same (a thin part whose tissue is nearer to the thick
+  // part's bone), the other is the second nearest bone of the side where it is nearer.
   std::map<Pair, std::vector<std::size_t>> creaseOf;
   std::map<Pair, std::vector<double>> shiftSamples;  // dA - dB (A the pair's first) at the crease
   for (std::size_t v = 0; v < n; ++v) {
     if (crease[v] != 1) continue;
-    std::array<std::pair<float, std::int16_t>, 8> near{};  // (distance, bone), bones met so far
-    int nNear = 0;
-    auto meet = [&](std::int16_t b, float d) {
-      if (b < 0) return;
-      int s = 0;
-      while (s < nNear && near[s].second != b) ++s;
-      if (s == nNear) {
-        if (nNear == int(near.size())) return;
-        near[nNear++] = {d, b};
-      } else if (d < near[s].first) {
-        near[s].first = d;
+    sandwichSides(body, v, options.creaseReach, [&](std::size_t w1, std::size_t w2, const Eigen::Vector3d&) {
+      int a = nb.first[w1], b = nb.first[w2];
+      if (a < 0 || b < 0) return false;
+      if (a == b) {
+        const std::size_t w = nb.secondMm[w1] <= nb.secondMm[w2] ? w1 : w2;
+        if (nb.second[w] < 0) return false;
+        b = nb.second[w];
       }
-    };
-    nbh.forEach(v, [&](std::size_t w, float mm) {
-      if (!body.data[w]) return;
-      meet(nb.first[w], nb.firstMm[w] + mm);
-      meet(nb.second[w], nb.secondMm[w] + mm);
+      const Pair p = makePair(a, b);
+      // Distances from v to the two bones, through the tissue beside it.
+      double dA = std::numeric_limits<double>::infinity(), dB = dA;
+      nbh.forEach(v, [&](std::size_t w, float mm) {
+        if (!body.data[w]) return;
+        for (int q = 0; q < 2; ++q) {
+          const int bone = q ? nb.second[w] : nb.first[w];
+          const double d = (q ? nb.secondMm[w] : nb.firstMm[w]) + mm;
+          if (bone == p.first) dA = std::min(dA, d);
+          if (bone == p.second) dB = std::min(dB, d);
+        }
+      });
+      if (!std::isfinite(dA) || !std::isfinite(dB)) return false;
+      creaseOf[p].push_back(v);
+      shiftSamples[p].push_back(dA - dB);
+      return true;
     });
-    if (nNear < 2) continue;
-    std::partial_sort(near.data(), near.data() + 2, near.data() + nNear);
-    const Pair p = makePair(near[0].second, near[1].second);
-    creaseOf[p].push_back(v);
-    const double dA = near[0].second == p.first ? near[0].first : near[1].first;
-    const double dB = near[0].second == p.first ? near[1].first : near[0].first;
-    shiftSamples[p].push_back(dA - dB);
   }
   std::map<Pair, std::size_t> contactIndex;
   for (auto& [p, voxels] : creaseOf) {
@@ -214,6 +219,9 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
     c.boneA = p.first, c.boneB = p.second;
     c.creaseVoxels = voxels.size();
     c.offsetMm = median(shiftSamples[p]);
+    // A crease far nearer to one bone than the other lies inside that bone's part (a fold of it),
+    // not where the two parts meet.
+    if (std::abs(c.offsetMm) > kMaxShiftMm) continue;
     contactIndex[p] = report.contacts.size();
     report.contacts.push_back(c);
   }

@@ -41,17 +41,18 @@ std::size_t boundaryFaces(const MaskVolume& mask) {
   return total;
 }
 
-double predictTets(std::size_t surfaceFaces, std::size_t seeds) {
-  // TetGen's tets (radius-edge 2) per surface face or seed: 11.6 on the medium phantom (179 506 faces,
-  // 54 605 seeds, 2.72 M tets), 12.3 on the small phantom lying in contact, 12.8 on the TotalSegmentator
-  // CT: rounded up, so the budget is rarely exceeded.
-  constexpr double kTetsPerPoint = 13.0;
-  return kTetsPerPoint * double(surfaceFaces + seeds);
+// kTetsPerPoint: TetGen's tets (radius-edge 2) per surface face or seed were 11.6 on the medium
+// phantom (179 506 faces, 54 605 seeds, 2.72 M tets), 12.3 on the small phantom lying in contact,
+// 12.8 on the TotalSegmentator CT and 16.4 on the Visible Human female at 3.7 mm (a real skin has more
+// small features): the mesher corrects its spacing once with the ratio it met.
+double predictTets(std::size_t surfaceFaces, std::size_t seeds, double tetsPerPoint) {
+  return tetsPerPoint * double(surfaceFaces + seeds);
 }
 
 MeshSpacingChoice chooseMeshSpacing(const MaskVolume& peeled, const LabelVolume& labels,
-                                    const std::vector<int>& boneOfLabel, double maxTets) {
+                                    const std::vector<int>& boneOfLabel, double maxTets, double tetsPerPoint) {
   if (!(maxTets >= 1000)) throw std::invalid_argument("mesh budget: the tet budget must be at least 1000");
+  if (!(tetsPerPoint > 0)) throw std::invalid_argument("mesh budget: the tets per surface point must be positive");
   const ImageGrid& scan = labels.grid;
   auto evaluate = [&](double h, MeshSpacingChoice& c) {
     const MeshingVolumes m = binToMeshingGrid(peeled, labels, boneOfLabel, meshingGrid(scan, h));
@@ -59,7 +60,7 @@ MeshSpacingChoice chooseMeshSpacing(const MaskVolume& peeled, const LabelVolume&
     c.spacingMm = h;
     c.surfaceFaces = boundaryFaces(m.body);
     c.seeds = std::size_t(boneSeedPoints(labels, boneOfLabel, peeled, steps.surface, steps.interior).rows());
-    c.predictedTets = predictTets(c.surfaceFaces, c.seeds);
+    c.predictedTets = predictTets(c.surfaceFaces, c.seeds, tetsPerPoint);
     ++c.trials;
   };
   MeshSpacingChoice trial, best;

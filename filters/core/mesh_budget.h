@@ -21,7 +21,8 @@ std::size_t boundaryFaces(const MaskVolume& mask);
 /// Tets TetGen makes (radius-edge bound 2) from a body whose binned mask has `surfaceFaces`
 /// boundary faces (the marching-cubes surface has about one vertex per face) and `seeds` bone seed
 /// points: about 12 per face or seed on the phantoms and real scans, 13 taken.
-double predictTets(std::size_t surfaceFaces, std::size_t seeds);
+constexpr double kTetsPerPoint = 13.0;
+double predictTets(std::size_t surfaceFaces, std::size_t seeds, double tetsPerPoint = kTetsPerPoint);
 
 struct MeshSpacingChoice {
   double spacingMm = 0;        ///< the meshing spacing chosen
@@ -35,7 +36,9 @@ struct MeshSpacingChoice {
 /// the mask (binToMeshingGrid) and counting its faces and the bone seeds (each trial one pass over
 /// the scan). peeled: the body to mesh on the scan's grid; boneOfLabel: label -> bone or -1.
 /// Throws std::invalid_argument when maxTets < 1000 or the inputs disagree.
+/// tetsPerPoint: as predictTets; a caller that has meshed once may pass the ratio it measured.
 MeshSpacingChoice chooseMeshSpacing(const MaskVolume& peeled, const LabelVolume& labels,
-                                    const std::vector<int>& boneOfLabel, double maxTets);
+                                    const std::vector<int>& boneOfLabel, double maxTets,
+                                    double tetsPerPoint = kTetsPerPoint);
 
 }  // namespace repose

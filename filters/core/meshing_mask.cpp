@@ -14,7 +14,15 @@ std::size_t countSet(const MaskVolume& m) { return std::size_t(std::count(m.data
 MeshingMask meshingMask(const LabelVolume& labels, const IntensityVolume* image, const std::vector<int>& boneOfLabel,
                         const Skeleton& skeleton, const MeshingMaskOptions& options) {
   MeshingMask out;
-  out.body = bodyMask(labels, image, options.body);
+  BodyMaskOptions bodyOptions = options.body;
+  bodyOptions.keepLargestComponent = false;  // every piece that can be posed is kept, below
+  if (!image && options.skinLabels.empty() && bodyOptions.closingMm == 0 && labelsLeaveGaps(labels))
+    bodyOptions.closingMm = 2 * labels.grid.spacing.maxCoeff();
+  out.closedMm = bodyOptions.closingMm;
+  out.body = bodyMask(labels, image, bodyOptions);
+  out.components = keepPosableComponents(out.body, labels, boneOfLabel);
+  if (out.components.kept == 0)
+    throw std::invalid_argument("no piece of the body holds a bone of the skeleton: check the skeleton's labels");
   out.bodyVoxels = countSet(out.body);
 
   if (!options.skinLabels.empty()) {
@@ -36,7 +44,7 @@ MeshingMask meshingMask(const LabelVolume& labels, const IntensityVolume* image,
   if (options.meshSpacingMm > 0 || !(options.maxTets > 0)) {
     out.spacing.spacingMm = std::max(options.meshSpacingMm, labels.grid.spacing.minCoeff());
   } else {
-    out.spacing = chooseMeshSpacing(out.peeled, labels, boneOfLabel, options.maxTets);
+    out.spacing = chooseMeshSpacing(out.peeled, labels, boneOfLabel, options.maxTets, options.tetsPerPoint);
   }
   out.mesh = binToMeshingGrid(out.peeled, labels, boneOfLabel, meshingGrid(labels.grid, out.spacing.spacingMm));
   if (options.separateContacts) out.contacts = separateContacts(out.mesh.body, out.mesh.bone, skeleton, options.contact);
