@@ -173,6 +173,21 @@ TEST(ContactSeparation, AJointBetweenParentAndChildIsKept) {
   EXPECT_EQ(std::size_t(std::count(body.data.begin(), body.data.end(), 1)), before);
 }
 
+TEST(ContactSeparation, TheTrunkFoldingIsNoContact) {
+  // The same two parts pressed together, as segments of the spine (a roll of the belly between
+  // two vertebral segments): one trunk, nothing cut. As an arm against the torso, they are cut
+  // (but for the tissue around the shoulder, which the joint guard keeps).
+  for (const bool spinal : {true, false}) {
+    TwoParts t = pressedParts(5, 12);
+    t.skeleton.joints[1].name = "vertebra_T12";
+    t.skeleton.joints[0].name = spinal ? "vertebra_L1" : "left_shoulder";
+    t.skeleton.joints[0].parent = 1;
+    const ContactSeparationReport r = separateContacts(t.body, t.bone, t.skeleton);
+    EXPECT_EQ(r.voxelsCut == 0, spinal) << r.text(t.skeleton);
+    if (spinal) EXPECT_EQ(components(t.body), 1);
+  }
+}
+
 TEST(ContactSeparation, PartsApartNeedNoCut) {
   TwoParts t = pressedParts(5, 12);
   // Open a background gap between the parts: nothing welds them, nothing is cut.

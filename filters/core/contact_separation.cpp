@@ -123,6 +123,19 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// The pelvis and the segments of the spinal column are one trunk: a crease between a segment and
+// the next (a belly over the pubis, rolls of the back) is the trunk folding, never a contact. The
+// head and the limbs are not of it (a chin on the chest, an arm against the torso are contacts).
+bool spinalSegment(const std::string& name) {
+  return name == "pelvis" || name == "spine" || name.rfind("vertebra_", 0) == 0;
+}
+
+bool trunkFold(const Skeleton& skeleton, int a, int b) {
+  const Joint& ja = skeleton.joints[std::size_t(a)];
+  const Joint& jb = skeleton.joints[std::size_t(b)];
+  return (ja.parent == b || jb.parent == a) && spinalSegment(ja.name) && spinalSegment(jb.name);
+}
+
 }  // namespace
 
 std::string ContactSeparationReport::text(const Skeleton& skeleton) const {
@@ -222,6 +235,7 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
     // A crease far nearer to one bone than the other lies inside that bone's part (a fold of it),
     // not where the two parts meet.
     if (std::abs(c.offsetMm) > kMaxShiftMm) continue;
+    if (trunkFold(skeleton, p.first, p.second)) continue;
     contactIndex[p] = report.contacts.size();
     report.contacts.push_back(c);
   }
