@@ -582,9 +582,18 @@ TEST(BodyMask, EveryPosablePieceIsKeptAndLabelledPiecesAreBridged) {
   EXPECT_TRUE(seen[g.linearIndex(8, 8, 8)]);
   EXPECT_EQ(mask.at(30, 3, 3), 0);
   EXPECT_EQ(mask.at(32, 14, 4), 0);
-  // The labels alone leave gaps when no label holds half of them.
-  EXPECT_FALSE(labelsLeaveGaps(labels));  // soft tissue (1) holds most
+  // The labels alone leave gaps when no label makes half of their outside.
+  EXPECT_FALSE(labelsLeaveGaps(labels));  // soft tissue (1) makes most
   LabelVolume organs = makeLabels(g);
   for (int k = 0; k < 3; ++k) organs.at(k * 10, 5, 5) = organs.at(k * 10 + 1, 5, 5) = 3 + k;  // three organs
   EXPECT_TRUE(labelsLeaveGaps(organs));
+  // A thin skin around many tissues, none of them half the body: the skin makes the outside.
+  LabelVolume skinned = makeLabels(g);
+  for (int k = 2; k < 18; ++k)
+    for (int j = 2; j < 18; ++j)
+      for (int i = 2; i < 38; ++i) {
+        const bool shell = k == 2 || k == 17 || j == 2 || j == 17 || i == 2 || i == 37;
+        skinned.at(i, j, k) = shell ? 1 : 2 + i / 6;  // 1 = skin, six tissues inside
+      }
+  EXPECT_FALSE(labelsLeaveGaps(skinned));
 }

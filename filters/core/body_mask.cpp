@@ -173,13 +173,26 @@ void close(MaskVolume& mask, double r) {
 }  // namespace
 
 bool labelsLeaveGaps(const LabelVolume& labels) {
+  // The labels of the labelled voxels on the outside of the labelled region (a face on unlabelled).
+  const ImageGrid& g = labels.grid;
+  const auto& d = g.dims;
   std::unordered_map<std::int32_t, std::size_t> count;
-  std::size_t labelled = 0;
-  for (std::int32_t v : labels.data)
-    if (v != 0) ++count[v], ++labelled;
+  std::size_t outer = 0;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i) {
+        const std::int32_t v = labels.at(i, j, k);
+        if (v == 0) continue;
+        const int n[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+        for (const auto& q : n)
+          if (g.contains(q[0], q[1], q[2]) && labels.at(q[0], q[1], q[2]) == 0) {
+            ++count[v], ++outer;
+            break;
+          }
+      }
   std::size_t largest = 0;
   for (const auto& [v, c] : count) largest = std::max(largest, c);
-  return labelled > 0 && 2 * largest < labelled;
+  return outer > 0 && 2 * largest < outer;
 }
 
 PosableComponentsReport keepPosableComponents(MaskVolume& mask, const LabelVolume& labels,

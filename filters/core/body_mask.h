@@ -26,9 +26,10 @@ struct BodyMaskOptions {
 /// Throws std::invalid_argument when the image is on a different grid or the mask is empty.
 MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, const BodyMaskOptions& options);
 
-/// Whether the labels alone leave gaps in the body: no single label holds half of the labelled
-/// voxels (a body labelled as a whole has one, its soft tissue or skin interior). Such a body is
-/// closed (BodyMaskOptions::closingMm) before meshing.
+/// Whether the labels alone leave gaps in the body: no single label makes half of the outside of
+/// the labelled region (a body labelled as a whole has one there, its skin or soft tissue; organs
+/// and bones labelled alone show many). Such a body is closed (BodyMaskOptions::closingMm) before
+/// meshing, which would fill the creases between touching parts of a body that has a skin.
 bool labelsLeaveGaps(const LabelVolume& labels);
 
 struct PosableComponentsReport {
