@@ -1,10 +1,12 @@
 #!/usr/bin/python3
-"""Repose benchmark: per-stage time and peak memory on the built-in phantom, with voxel, node and tet
-counts, and the per-pose costs (skinning the nodes, moving the surfaces, pulling the posed volume, and
-pulling one axial slice of it as a viewer would).
+"""Repose benchmark: per-stage time and peak memory on the built-in phantom and on scans of your own
+(a whole body), with voxel, node and tet counts, and the per-pose costs (skinning the nodes, moving
+the surfaces, pulling the posed volume, and pulling one axial slice of it as a viewer would).
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark.py [--sizes small,medium,large]
-       [--repose build/bin/repose] [--work DIR] [--poses N]
+       [--scan NAME=LABELS[:SKELETON] ...] [--repose build/bin/repose] [--work DIR] [--poses N]
+A scan is prepared as `repose prepare --labels LABELS --skeleton SKELETON` (default: auto) with the
+default tet budget.
 Prints a Markdown table. Preprocessing is timed through the CLI (as a user runs it), posing through
 the Python-wrapped filters so that repeated poses reuse the loaded case as an interactive tool does."""
 import argparse
@@ -64,6 +66,7 @@ def pose_costs(case, poses):
     lr.SetFileName(f"{case}/labels.nii.gz")
     lr.Update()
     skeleton = open(f"{case}/skeleton.json").read()
+    joints = {j["name"] for j in json.loads(skeleton)["joints"]}
     sk = vtkReposeSkinning()
     sk.SetInputConnection(mr.GetOutputPort())
     sk.SetSkeletonJSON(skeleton)
@@ -85,9 +88,10 @@ def pose_costs(case, poses):
     skin, surf, vol, sl, voxels = [], [], [], [], 0
     for i in range(poses + 1):
         a = 10 + 50 * i / max(poses, 1)
-        sk.SetPoseJSON(json.dumps({"rotations": {
-            "left_hip": {"axis": [1, 0, 0], "degrees": -a}, "left_knee": {"axis": [1, 0, 0], "degrees": a},
-            "right_shoulder": {"axis": [0, 1, 0], "degrees": a}, "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}}))
+        rotations = {"left_hip": {"axis": [1, 0, 0], "degrees": -a}, "left_knee": {"axis": [1, 0, 0], "degrees": a},
+                     "right_shoulder": {"axis": [0, 1, 0], "degrees": a},
+                     "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}
+        sk.SetPoseJSON(json.dumps({"rotations": {k: v for k, v in rotations.items() if k in joints}}))
         t = time.perf_counter(); sk.Update(); t1 = time.perf_counter()
         de.Update(); t2 = time.perf_counter()
         vo.Update(); t3 = time.perf_counter()
@@ -103,31 +107,48 @@ def pose_costs(case, poses):
     return med(skin), med(surf), med(vol), med(sl), voxels, sr.GetOutput().GetNumberOfPoints()
 
 
+def image_dims(path):
+    from repose import vtkReposeImageReader
+    r = vtkReposeImageReader()
+    r.SetFileName(path)
+    r.Update()
+    return r.GetOutput().GetDimensions()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", default="small,medium,large")
+    ap.add_argument("--sizes", default="small,medium,large", help="phantom sizes (empty: none)")
+    ap.add_argument("--scan", action="append", default=[], metavar="NAME=LABELS[:SKELETON]",
+                    help="a label volume of your own, prepared with SKELETON (default: auto); repeatable")
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None)
     ap.add_argument("--poses", type=int, default=5)
     args = ap.parse_args()
     work = args.work or tempfile.mkdtemp(prefix="repose-bench-")
     rows = []
-    for size in args.sizes.split(","):
-        d = os.path.join(work, size)
-        out, t_ph, _ = measured_subprocess([args.repose, "phantom", "--size", size, "--out", f"{d}/phantom"])
-        dims = re.search(r"(\d+)x(\d+)x(\d+) voxels", out).groups()
-        voxels = int(dims[0]) * int(dims[1]) * int(dims[2])
-        out, t_prep, mem = measured_subprocess([args.repose, "prepare", "--labels", f"{d}/phantom/labels.nii.gz",
-                                                "--skeleton", f"{d}/phantom/skeleton.json", "--out", f"{d}/case"])
+    cases = [(size, None) for size in args.sizes.split(",") if size]
+    cases += [tuple(entry.split("=", 1)) for entry in args.scan]
+    for name, scan in cases:
+        d = os.path.join(work, name)
+        if scan is None:
+            out, _, _ = measured_subprocess([args.repose, "phantom", "--size", name, "--out", f"{d}/phantom"])
+            labels, skeleton = f"{d}/phantom/labels.nii.gz", f"{d}/phantom/skeleton.json"
+        else:
+            labels, _, skeleton = scan.partition(":")
+            skeleton = skeleton or "auto"
+        out, t_prep, mem = measured_subprocess([args.repose, "prepare", "--labels", labels, "--skeleton", skeleton,
+                                                "--out", f"{d}/case"])
         st = stage_times(out)
         m = re.search(r"tet mesh: (\d+) nodes, (\d+) tets", out)
         nodes, tets = int(m.group(1)), int(m.group(2))
+        dims = image_dims(f"{d}/case/labels.nii.gz")
+        voxels = dims[0] * dims[1] * dims[2]
         skin, surf, vol, sl, outvox, surfverts = pose_costs(f"{d}/case", args.poses)
-        rows.append((size, "x".join(dims), voxels, nodes, tets, surfverts, st.get("mesh", 0), st.get("weights", 0),
-                     st.get("surfaces", 0), st.get("binding", 0), t_prep, mem, skin * 1e3, surf * 1e3,
-                     vol * 1e3, outvox / vol / 1e6, sl * 1e3))
-        print(f"{size}: done", file=sys.stderr)
-    print("| size | voxels | nodes | tets | surface verts | mesh s | weights s | surfaces s | binding s |"
+        rows.append((name, "x".join(map(str, dims)), voxels, nodes, tets, surfverts, st.get("mesh", 0),
+                     st.get("weights", 0), st.get("surfaces", 0), st.get("binding", 0), t_prep, mem, skin * 1e3,
+                     surf * 1e3, vol * 1e3, outvox / vol / 1e6, sl * 1e3))
+        print(f"{name}: done", file=sys.stderr)
+    print("| case | voxels | nodes | tets | surface verts | mesh s | weights s | surfaces s | binding s |"
           " prepare total s | prepare peak MiB | skin nodes ms | move surfaces ms | posed labels ms | Mvox/s |"
           " posed slice ms |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
