@@ -1,4 +1,5 @@
 // The `repose` command line: demo, phantom, prepare, pose.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +35,8 @@
 #include "atomic_outputs.h"
 #include "deformation_stats.h"
 #include "fidelity_plot.h"
+#include "label_table.h"
+#include "label_table_fit.h"
 #include "mesh_io.h"
 #include "mesh_posing.h"
 #include "ReposeImageConversion.h"
@@ -143,22 +146,33 @@ const char* kPhantomUsage =
 
 const char* kRigUsage =
     "usage: repose rig --labels FILE [--label-table FILE] --out skeleton.json [--max-gap MM]\n"
-    "  Finds the joint centres from the bone labels (ball joints by sphere fits to the femoral and humeral\n"
-    "  heads, other joints where adjacent bones come closest), builds the tree from the bone adjacency\n"
-    "  rooted at the pelvis and names the joints so motion can be mapped onto them. Labels holding\n"
-    "  several bones are split into connected components; then the relabelled volume is written beside\n"
-    "  the skeleton (labels_rigged.nii.gz) and the skeleton refers to it. Bones cut by the field of view\n"
-    "  and missing bones are reported. TotalSegmentator's class names are known without a table.\n"
-    "  --label-table FILE  value<TAB>name[<TAB>bone|soft|background] lines\n"
+    "  Finds the joints from the bone labels and writes an editable skeleton.json, rooted at the pelvis.\n"
+    "  Ball joints by sphere fits to the femoral and humeral heads, others where adjacent bones come closest.\n"
+    "  A label holding both sides (femur) is split (femur_left, femur_right). Smaller pieces of a label\n"
+    "  (under 25 % of its largest piece or 0.5 ml, or more than one per side) are never joints: each goes to\n"
+    "  its own bone when that touches it or lies within 20 mm on its side of the midline, else to a bone it\n"
+    "  touches, else to the nearest bone on its side within 20 mm, else it is left as soft tissue (label\n"
+    "  unassigned_bone_fragments); the report says where each went. Parents follow anatomy: skull on the\n"
+    "  cervical spine, patella with its femur, ribs and sternum with the spine, clavicle - scapula - humerus\n"
+    "  on each side. Joint names come from a fixed vocabulary whatever the table calls the bones: pelvis,\n"
+    "  spine, chest, neck, head, jaw, vertebra_L4, left_/right_ clavicle, scapula, shoulder, elbow, wrist,\n"
+    "  hip, knee, ankle. When labels were split or pieces moved, the relabelled volume and its table are\n"
+    "  written beside the skeleton (labels_rigged.nii.gz, labels_rigged.tsv).\n"
+    "  --label-table FILE  value<TAB>name[<TAB>bone|soft|background] lines, or a 3D Slicer colour table\n"
+    "                      (.ctbl/.txt: value name R G B A). Default: the table beside the labels (NAME.tsv,\n"
+    "                      NAME.ctbl, NAME_ColorTable.ctbl, NAME.txt unless it holds no table, labels.tsv for\n"
+    "                      NAME.nii.gz), else TotalSegmentator's class names. A table whose bone names\n"
+    "                      contradict where the bones lie (the wrong table) is an error\n"
     "  --max-gap MM        largest gap between bones that still makes a joint (default 6)\n";
 
 const char* kPrepareUsage =
     "usage: repose prepare --labels FILE --skeleton FILE|auto [--image CT_FILE] --out CASE_DIR [options]\n"
     "  Meshes the body with TetGen, solves Laplace's equation for the bone weights and binds the skin\n"
     "  and bone surfaces to the mesh. CASE_DIR then holds mesh.vtu, surfaces.vtp, skeleton.json,\n"
-    "  labels.<ext> and manifest.json (ParaView opens the .vtu/.vtp as they are).\n"
+    "  labels.<ext>, labels.tsv (the label table) and manifest.json (ParaView opens the .vtu/.vtp as they are).\n"
     "  --skeleton auto         find the skeleton from the bone labels (see 'repose rig')\n"
-    "  --label-table FILE      label names and kinds, for --skeleton auto\n"
+    "  --label-table FILE      label names and kinds (TSV or 3D Slicer colour table); default: the table beside\n"
+    "                          the labels, else TotalSegmentator's names (see 'repose rig --help')\n"
     "  --image FILE            CT on the label grid: the body is the labels united with CT above the threshold\n"
     "  --body-threshold HU     default -500\n"
     "  --mesh-spacing MM       mesh the body on this voxel size (default: the label spacing); coarser = fewer tets\n"
@@ -303,16 +317,88 @@ void prepareCase(repose::Pipeline& pipeline, vtkImageData* labels, const std::st
   for (const auto& line : pipeline.reportLines()) std::cout << "  " << line << "\n";
 }
 
+/// The label table a volume is read with: --label-table, else the table beside the volume (see
+/// repose::findLabelTableBeside), else the built-in TotalSegmentator names.
+struct LabelTableChoice {
+  repose::LabelTable table;
+  std::string text;    // the file's text; empty for the built-in names
+  std::string path;    // the file; empty for the built-in names
+  std::string origin;  // for the console
+};
+
+LabelTableChoice builtinLabelTable(const std::string& labelsPath) {
+  LabelTableChoice c;
+  c.table = repose::builtinTotalSegmentatorTable();
+  c.origin = "built-in TotalSegmentator names (no --label-table given, none found beside " + labelsPath + ")";
+  return c;
+}
+
+/// Reads a label table; a file that holds none is an error naming it.
+repose::LabelTable readLabelTable(const std::string& path, const std::string& text) {
+  repose::LabelTable table;
+  try {
+    table = repose::parseLabelTable(text, path);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  if (table.labels.empty())
+    throw std::runtime_error(path + ": holds no labels (expected value<TAB>name[<TAB>kind] or value name R G B A lines)");
+  return table;
+}
+
+LabelTableChoice chooseLabelTable(const std::string& labelsPath, const Options& o) {
+  LabelTableChoice c;
+  if (o.has("label-table")) {
+    c.path = o.get("label-table");
+    c.text = repose::readTextFile(c.path);
+    c.table = readLabelTable(c.path, c.text);
+    c.origin = c.path;
+    return c;
+  }
+  for (const std::string& path : repose::labelTablesBeside(labelsPath)) {
+    c.path = path;
+    c.text = repose::readTextFile(path);
+    try {
+      c.table = readLabelTable(path, c.text);
+    } catch (const std::runtime_error& e) {
+      // NAME.txt beside the volume may be notes rather than a Slicer colour table: not an error.
+      if (repose::imageExtension(path) != ".txt") throw;
+      std::cout << "label table: ignoring " << path << " (" << e.what() << ")" << std::endl;
+      continue;
+    }
+    c.origin = path + " (found beside " + labelsPath + ")";
+    return c;
+  }
+  return builtinLabelTable(labelsPath);
+}
+
+/// A table whose bone names contradict where the bones lie is the wrong table: say so, naming it.
+void requireTableFits(vtkImageData* labels, const std::string& labelsPath, const LabelTableChoice& c) {
+  repose::LabelVolume volume;
+  if (!repose_vtk::ToVolume(labels, volume)) throw std::runtime_error(labelsPath + ": not a label volume");
+  const repose::LabelTableFit fit = repose::checkLabelTableFit(volume, c.table);
+  if (fit.fits()) return;
+  if (c.path.empty())
+    throw std::runtime_error(labelsPath + ": the built-in TotalSegmentator names do not fit it (no --label-table given, "
+                             "none found beside it): " + fit.problem() + "; give its label table with --label-table");
+  throw std::runtime_error(c.path + ": does not fit " + labelsPath + ": " + fit.problem() +
+                           "; give the volume's own label table with --label-table");
+}
+
 struct RigResult {
-  vtkSmartPointer<vtkImageData> labels;  // relabelled when a label held several bones
+  vtkSmartPointer<vtkImageData> labels;  // relabelled when a label held several bones or fragments moved
   std::string skeletonJson, report, tableTsv;
   bool relabelled = false;
 };
 
 RigResult rigLabels(vtkImageData* labels, const std::string& labelsName, const Options& o) {
+  const LabelTableChoice table = chooseLabelTable(labelsName, o);
+  requireTableFits(labels, labelsName, table);
   auto rig = vtkSmartPointer<vtkReposeAutoRig>::New();
   rig->SetInputData(labels);
-  if (o.has("label-table")) rig->SetLabelTableTSV(repose::readTextFile(o.get("label-table")).c_str());
+  rig->SetLabelTableTSV(table.text.c_str());
+  rig->SetLabelTableName(table.origin.c_str());  // the report's "label table:" line
+  rig->CheckLabelTableOff();  // checked above, with the file names
   if (o.has("max-gap")) rig->SetMaxGapMm(o.number("max-gap", 6));
   const std::string what = "automatic skeleton of " + labelsName;
   repose::updateOrThrow(rig, what);
@@ -324,7 +410,8 @@ RigResult rigLabels(vtkImageData* labels, const std::string& labelsName, const O
   r.tableTsv = rig->GetOutputLabelTableTSV();
   if (rig->GetNumberOfJoints() < 2)
     throw std::runtime_error(labelsName + ": the automatic skeleton found " + std::to_string(rig->GetNumberOfJoints()) +
-                             " joint(s); name the bones with --label-table or write skeleton.json by hand");
+                             " joint(s) with the label table " + (table.path.empty() ? "of TotalSegmentator" : table.path) +
+                             "; name the bones with --label-table or write skeleton.json by hand");
   vtkDataArray* a = labels->GetPointData()->GetScalars();
   vtkDataArray* b = r.labels->GetPointData()->GetScalars();
   for (vtkIdType i = 0, n = a->GetNumberOfTuples(); i < n && !r.relabelled; ++i)
@@ -349,8 +436,37 @@ int runRig(const Options& o) {
   files.commit();
   std::cout << r.report;
   std::cout << "skeleton written to " << outPath
-            << (r.relabelled ? " (it refers to the relabelled " + dir + "/labels_rigged.nii.gz)" : std::string()) << "\n";
+            << (r.relabelled ? " (it refers to the relabelled " + dir + "/labels_rigged.nii.gz, table labels_rigged.tsv)"
+                             : std::string())
+            << "\n";
   return 0;
+}
+
+/// The label table kept in a case prepared from a hand-written skeleton: the chosen table; the
+/// built-in TotalSegmentator names (of the values present) only when they fit the volume; else ""
+/// (the case then names its labels label_<value>, see Pipeline::saveCase).
+std::string caseLabelTable(vtkImageData* labels, const std::string& labelsPath, const Options& o) {
+  const LabelTableChoice c = chooseLabelTable(labelsPath, o);
+  if (!c.path.empty()) {
+    std::cout << "label table: " << c.origin << std::endl;
+    return repose::labelTableToTsv(c.table);
+  }
+  repose::LabelVolume volume;
+  if (!repose_vtk::ToVolume(labels, volume)) return "";
+  const std::set<int> present(volume.data.begin(), volume.data.end());
+  const repose::LabelTableFit fit = repose::checkLabelTableFit(volume, c.table);
+  const bool named = fit.checked >= 3 && fit.fits() &&
+                     std::all_of(present.begin(), present.end(), [&](int v) { return v == 0 || c.table.find(v); });
+  if (!named) {
+    std::cout << "label table: none given or found beside " << labelsPath << "; the case names its labels label_<value>"
+              << std::endl;
+    return "";
+  }
+  repose::LabelTable table;
+  for (const repose::LabelInfo& l : c.table.labels)
+    if (present.count(l.value)) table.labels.push_back(l);
+  std::cout << "label table: " << c.origin << std::endl;
+  return repose::labelTableToTsv(table);
 }
 
 int runPrepare(const Options& o) {
@@ -361,23 +477,26 @@ int runPrepare(const Options& o) {
   repose::Pipeline pipeline;
   pipeline.setProgress([](const std::string& s) { std::cout << "prepare: " << s << "..." << std::endl; });
   vtkSmartPointer<vtkImageData> labels = repose::readLabelVolume(labelsPath);
-  std::string skeletonJson;
+  std::string skeletonJson, tableTsv;
   if (skeletonPath == "auto") {
     std::cout << "prepare: finding the skeleton from the bone labels..." << std::endl;
     const RigResult r = rigLabels(labels, labelsPath, o);
     std::cout << r.report;
     labels = r.labels;
     skeletonJson = r.skeletonJson;
+    tableTsv = r.tableTsv;
   } else {
     skeletonJson = repose::readTextFile(skeletonPath);
+    tableTsv = caseLabelTable(labels, labelsPath, o);
   }
   vtkSmartPointer<vtkImageData> image;
   if (o.has("image")) image = repose::readIntensityImage(o.get("image"));
   std::string ext = repose::imageExtension(labelsPath);
   if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha") ext = ".nii.gz";
+  pipeline.setLabelTableTsv(tableTsv);
   prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath == "auto" ? "automatic skeleton" : skeletonPath,
               image, o.get("image"), o, caseDir, ext);
-  std::cout << "prepared case written to " << caseDir << "\n";
+  std::cout << "prepared case written to " << caseDir << " (label table: " << caseDir << "/labels.tsv)\n";
   printTimings(pipeline);
   return 0;
 }
@@ -803,6 +922,7 @@ int runDemo(const Options& o, int argc, char** argv) {
   repose::writeTextFile(out.stage("skeleton.json"), skeletonJson);
   repose::writeTextFile(out.stage("pose.json"), kDemoPose);
   repose::writeTextFile(out.stage("labels.tsv"), phantom->GetLabelTableTSV());
+  pipeline.setLabelTableTsv(phantom->GetLabelTableTSV());
   prepareCase(pipeline, labels, "phantom", skeletonJson, "phantom skeleton", nullptr, "", o, out.stage("case"),
               ".nii.gz");
 

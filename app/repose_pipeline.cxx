@@ -44,6 +44,7 @@
 #include "pose.h"
 #include "skeleton.h"
 #include "deformation_stats.h"
+#include "label_table.h"
 #include "tet_mesh.h"
 
 namespace repose {
@@ -318,6 +319,16 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   connectPosing();
 }
 
+std::string Pipeline::genericCaseTable() const {
+  std::vector<int> values, bones;
+  vtkDataArray* scalars = restLabels_->GetPointData()->GetScalars();
+  std::set<int> seen;
+  for (vtkIdType i = 0, n = scalars->GetNumberOfTuples(); i < n; ++i) seen.insert(int(scalars->GetTuple1(i)));
+  values.assign(seen.begin(), seen.end());
+  for (const Joint& j : parseSkeletonJson(skeletonJson_).joints) bones.insert(bones.end(), j.labels.begin(), j.labels.end());
+  return labelTableToTsv(genericLabelTable(values, bones));
+}
+
 void Pipeline::saveCase(const std::string& caseDir, const std::string& labelsExtension) const {
   if (!restMesh_) throw std::runtime_error("nothing to save: the case is not prepared");
   AtomicOutputs out(caseDir);
@@ -325,6 +336,7 @@ void Pipeline::saveCase(const std::string& caseDir, const std::string& labelsExt
   writeSurfaces(restSurfaces_, out.stage("surfaces.vtp"));
   writeTextFile(out.stage("skeleton.json"), skeletonJson_);
   writeImage(restLabels_, out.stage("labels" + labelsExtension));
+  writeTextFile(out.stage("labels.tsv"), labelTableTsv_.empty() ? genericCaseTable() : labelTableTsv_);
 
   Json::Value manifest;
   manifest["format"] = "repose-case";
@@ -333,6 +345,7 @@ void Pipeline::saveCase(const std::string& caseDir, const std::string& labelsExt
   manifest["surfaces"] = "surfaces.vtp";
   manifest["skeleton"] = "skeleton.json";
   manifest["labels"] = "labels" + labelsExtension;
+  manifest["labelTable"] = "labels.tsv";
   manifest["nodes"] = Json::Int64(restMesh_->GetNumberOfPoints());
   manifest["tets"] = Json::Int64(restMesh_->GetNumberOfCells());
   for (const auto& line : report_) manifest["report"].append(line);
@@ -390,6 +403,17 @@ void Pipeline::loadCase(const std::string& caseDir) {
   }
   restLabels_ = readLabelVolume(labelsPath);
   labelsExtension_ = imageExtension(labelsPath);
+  labelTableTsv_.clear();
+  if (manifest.isMember("labelTable")) {  // cases saved before it was kept have none
+    const std::string tablePath = caseDir + "/" + manifest["labelTable"].asString();
+    if (!fileExists(tablePath)) throw std::runtime_error(tablePath + ": missing from the case directory");
+    labelTableTsv_ = readTextFile(tablePath);
+    try {
+      parseLabelTable(labelTableTsv_, tablePath);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(e.what());
+    }
+  }
   timed("load case", secondsSince(t0));
   connectPosing();
 }

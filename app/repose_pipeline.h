@@ -78,10 +78,17 @@ public:
   void prepare(vtkImageData* labels, const std::string& labelsName, const std::string& skeletonJson,
                const std::string& skeletonName, vtkImageData* image, const std::string& imageName,
                const PrepareSettings& settings);
-  /// Writes mesh.vtu, surfaces.vtp, skeleton.json, labels<ext>, manifest.json atomically.
+  /// Writes mesh.vtu, surfaces.vtp, skeleton.json, labels<ext>, labels.tsv and manifest.json
+  /// atomically. labels.tsv (listed in the manifest as "labelTable") is the label table set with
+  /// setLabelTableTsv(), or else one naming every label value label_<value> (bone when the skeleton
+  /// uses it): value<TAB>name<TAB>kind lines with a header, plus r g b a columns when colours are known.
   void saveCase(const std::string& caseDir, const std::string& labelsExtension = ".nii.gz") const;
-  /// Throws std::runtime_error naming the missing or broken file.
+  /// Throws std::runtime_error naming the missing or broken file. Cases saved before the label
+  /// table was kept load too (labelTableTsv() is then empty).
   void loadCase(const std::string& caseDir);
+  /// The label table of the case (labels.tsv text, see saveCase), kept with it.
+  void setLabelTableTsv(const std::string& tsv) { labelTableTsv_ = tsv; }
+  const std::string& labelTableTsv() const { return labelTableTsv_; }
 
   // --- posing --------------------------------------------------------------------------------
   /// Validates (unknown joints, NaN, zero axis) and sets the pose; throws std::runtime_error.
@@ -147,13 +154,14 @@ public:
 
 private:
   void connectPosing();
+  std::string genericCaseTable() const;
   void runStage(vtkAlgorithm* filter, const std::string& stage);
   void note(const std::string& stage);
   void timed(const std::string& stage, double seconds);
 
   Progress progress_;
   std::function<bool()> cancel_;
-  std::string skeletonJson_, labelsExtension_ = ".nii.gz";
+  std::string skeletonJson_, labelsExtension_ = ".nii.gz", labelTableTsv_;
   vtkSmartPointer<vtkImageData> restLabels_, restImage_;
   vtkSmartPointer<vtkUnstructuredGrid> restMesh_;
   vtkSmartPointer<vtkPolyData> restSurfaces_;

@@ -34,6 +34,8 @@ int vtkReposeAutoRig::RequestData(
   this->Report.clear();
   this->OutputLabelTableTSV.clear();
   this->NumberOfJoints = 0;
+  this->NumberOfReassignedFragments = 0;
+  this->ReassignedFragmentVoxels = this->UnassignedFragmentVoxels = 0;
   vtkImageData* input = vtkImageData::GetData(inputVector[0]);
   vtkImageData* output = vtkImageData::GetData(outputVector);
   vtkDataArray* scalars = input ? input->GetPointData()->GetScalars() : nullptr;
@@ -50,12 +52,15 @@ int vtkReposeAutoRig::RequestData(
       vtkErrorMacro("the label image's scalars do not match its extent");
       return 0;
     }
-    const repose::LabelTable table = this->LabelTableTSV.empty()
+    repose::LabelTable table = this->LabelTableTSV.empty()
       ? repose::builtinTotalSegmentatorTable()
-      : repose::parseLabelTable(this->LabelTableTSV, "LabelTableTSV");
+      : repose::parseLabelTable(
+          this->LabelTableTSV, this->LabelTableName.empty() ? "LabelTableTSV" : this->LabelTableName);
+    if (!this->LabelTableName.empty()) table.source = this->LabelTableName;
     repose::AutoRigOptions options;
     options.maxGapMm = this->MaxGapMm;
     options.maxGapVoxels = this->MaxGapVoxels;
+    options.checkTable = this->CheckLabelTable;
     const repose::AutoRigResult result = repose::autoRig(labels, table, options);
 
     output->CopyStructure(input);
@@ -70,6 +75,9 @@ int vtkReposeAutoRig::RequestData(
     this->OutputLabelTableTSV = repose::labelTableToTsv(result.table);
     this->NumberOfJoints = static_cast<int>(result.skeleton.size());
     this->Seconds = result.report.seconds;
+    this->NumberOfReassignedFragments = static_cast<int>(result.report.fragmentsReassigned);
+    this->ReassignedFragmentVoxels = static_cast<vtkIdType>(result.report.fragmentVoxelsReassigned);
+    this->UnassignedFragmentVoxels = static_cast<vtkIdType>(result.report.noiseVoxels);
   }
   catch (const std::exception& e)
   {
@@ -83,6 +91,8 @@ void vtkReposeAutoRig::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "LabelTableTSV: " << (this->LabelTableTSV.empty() ? "(TotalSegmentator)" : "(given)") << "\n";
+  os << indent << "LabelTableName: " << this->LabelTableName << "\n";
+  os << indent << "CheckLabelTable: " << this->CheckLabelTable << "\n";
   os << indent << "MaxGapMm: " << this->MaxGapMm << "\n";
   os << indent << "MaxGapVoxels: " << this->MaxGapVoxels << "\n";
   os << indent << "NumberOfJoints: " << this->NumberOfJoints << "\n";

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+
+#include "anatomy_names.h"
 
 namespace repose {
 
@@ -46,20 +49,6 @@ const char* const kTotalSegmentatorNames[] = {
 constexpr int kTotalSegmentatorCount = int(sizeof(kTotalSegmentatorNames) / sizeof(kTotalSegmentatorNames[0]));
 static_assert(kTotalSegmentatorCount == 117, "TotalSegmentator total task has 117 classes");
 
-// First '_'-separated token of bone names: TotalSegmentator's total and appendicular-bone classes
-// (vertebrae_L5, rib_left_3, hip_right, ...) and the built-in phantom's (spine, ribcage, femur_left).
-// Cartilage (costal_cartilages) is deliberately not bone: it bends.
-const std::set<std::string>& boneTokens() {
-  static const std::set<std::string> tokens = {
-      "sacrum",  "coccyx",   "skull",     "mandible",   "sternum",    "spine",       "ribcage",
-      "pelvis",  "hip",      "femur",     "humerus",    "scapula",    "clavicula",   "clavicle",
-      "rib",     "ribs",     "vertebra",  "vertebrae",  "tibia",      "fibula",      "patella",
-      "foot",    "hand",     "forearm",   "radius",     "ulna",       "carpal",      "carpals",
-      "metacarpal", "metacarpals", "tarsal", "tarsals", "metatarsal", "metatarsals", "phalanges",
-      "bone",    "bones",    "skeleton"};
-  return tokens;
-}
-
 std::vector<std::string> splitFields(const std::string& line) {
   std::vector<std::string> fields;
   if (line.find('\t') != std::string::npos) {
@@ -77,6 +66,41 @@ std::vector<std::string> splitFields(const std::string& line) {
     while (in >> field) fields.push_back(field);
   }
   return fields;
+}
+
+bool parseInt(const std::string& s, int& value);
+
+bool isKindWord(const std::string& s) {
+  const std::string t = lower(s);
+  return t == "bone" || t == "soft" || t == "background";
+}
+
+// The fields after the value: name, optional kind, optional colour (see parseLabelTable).
+void parseEntry(const std::vector<std::string>& f, bool tabs, LabelInfo& info) {
+  const std::string expected = " (expected value<TAB>name[<TAB>kind][<TAB>R<TAB>G<TAB>B[<TAB>A]] or value name R G B A)";
+  std::size_t end = f.size();  // fields [1, end) hold the name and the kind
+  int trailing = 0, dummy = 0;
+  while (trailing < int(end) - 2 && parseInt(f[end - 1 - trailing], dummy)) ++trailing;
+  if (tabs && trailing > 0 && trailing < 3 && end > 3)
+    throw std::invalid_argument("a colour needs 3 or 4 numbers" + expected);
+  if (trailing >= 3) {
+    const int n = std::min(trailing, 4);
+    for (int c = 0; c < 4; ++c) {
+      int v = 255;
+      if (c < n && (!parseInt(f[end - n + c], v) || v > 255))
+        throw std::invalid_argument("colour component '" + f[end - n + c] + "' is not within 0..255");
+      info.rgba[c] = std::uint8_t(v);
+    }
+    info.hasColor = true;
+    end -= n;
+  }
+  if (end < 2 || f[1].empty()) throw std::invalid_argument("label " + f[0] + " has no name" + expected);
+  const bool kindGiven = end >= 3 && (tabs || isKindWord(f[end - 1]));
+  if (tabs && end > 3) throw std::invalid_argument("too many fields" + expected);
+  info.kind = kindGiven ? parseLabelKind(f[end - 1]) : LabelKind::Soft;
+  info.name = f[1];
+  for (std::size_t i = 2; i + (kindGiven ? 1 : 0) < end; ++i) info.name += " " + f[i];
+  if (!kindGiven) info.kind = inferLabelKind(info.name);
 }
 
 bool parseInt(const std::string& s, int& value) {
@@ -124,14 +148,15 @@ const char* labelKindName(LabelKind kind) {
 
 LabelKind inferLabelKind(const std::string& name) {
   const std::string n = lower(name);
-  if (n == "background" || n == "none" || n == "unlabeled" || n == "unlabelled" || n == "clear label")
+  if (n == "background" || n == "none" || n == "unlabeled" || n == "unlabelled" || n == "clear label" ||
+      n == "clear_label")
     return LabelKind::Background;
-  const std::string token = n.substr(0, n.find('_'));
-  return boneTokens().count(token) ? LabelKind::Bone : LabelKind::Soft;
+  return namesBone(name) ? LabelKind::Bone : LabelKind::Soft;
 }
 
 LabelTable parseLabelTable(const std::string& text, const std::string& sourceName) {
   LabelTable table;
+  table.source = sourceName;
   std::set<int> seen;
   std::istringstream in(text);
   std::string line;
@@ -139,6 +164,7 @@ LabelTable parseLabelTable(const std::string& text, const std::string& sourceNam
   bool sawData = false;
   while (std::getline(in, line)) {
     ++lineNo;
+    const bool tabs = line.find('\t') != std::string::npos;
     const std::vector<std::string> f = splitFields(line);
     if (f.empty() || f[0][0] == '#') continue;
     const std::string where = sourceName + " line " + std::to_string(lineNo) + ": ";
@@ -152,13 +178,8 @@ LabelTable parseLabelTable(const std::string& text, const std::string& sourceNam
                                   "' (expected a non-negative integer, then a tab and a name)");
     }
     sawData = true;
-    if (f.size() < 2 || f[1].empty())
-      throw std::invalid_argument(where + "label " + f[0] + " has no name (expected value<TAB>name[<TAB>kind])");
-    if (f.size() > 3)
-      throw std::invalid_argument(where + "too many fields (expected value<TAB>name[<TAB>kind])");
-    info.name = f[1];
     try {
-      info.kind = f.size() == 3 ? parseLabelKind(f[2]) : inferLabelKind(info.name);
+      parseEntry(f, tabs, info);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(where + e.what());
     }
@@ -178,14 +199,58 @@ LabelTable readLabelTableFile(const std::string& path) {
 }
 
 std::string labelTableToTsv(const LabelTable& table) {
+  const bool colours = std::any_of(table.labels.begin(), table.labels.end(), [](const LabelInfo& l) { return l.hasColor; });
   std::ostringstream out;
-  out << "value\tname\tkind\n";
-  for (const LabelInfo& l : table.labels) out << l.value << '\t' << l.name << '\t' << labelKindName(l.kind) << '\n';
+  out << "value\tname\tkind" << (colours ? "\tr\tg\tb\ta" : "") << "\n";
+  for (const LabelInfo& l : table.labels) {
+    out << l.value << '\t' << l.name << '\t' << labelKindName(l.kind);
+    if (l.hasColor)
+      for (std::uint8_t c : l.rgba) out << '\t' << int(c);
+    out << '\n';
+  }
   return out.str();
+}
+
+std::vector<std::string> labelTablesBeside(const std::string& volumePath) {
+  namespace fs = std::filesystem;
+  const fs::path p(volumePath);
+  std::string name = p.filename().string();
+  const std::string lowerName = lower(name);
+  for (const char* ext : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd"}) {
+    const std::string e = ext;
+    if (lowerName.size() > e.size() && lowerName.compare(lowerName.size() - e.size(), e.size(), e) == 0) {
+      name.resize(name.size() - e.size());
+      break;
+    }
+  }
+  std::vector<std::string> found;
+  for (const std::string& candidate : {name + ".tsv", name + ".ctbl", name + "_ColorTable.ctbl", name + ".txt",
+                                       std::string("labels.tsv")}) {
+    std::error_code ec;
+    const fs::path c = p.parent_path() / candidate;
+    if (fs::is_regular_file(c, ec) && std::find(found.begin(), found.end(), c.string()) == found.end())
+      found.push_back(c.string());
+  }
+  return found;
+}
+
+std::string findLabelTableBeside(const std::string& volumePath) {
+  const std::vector<std::string> found = labelTablesBeside(volumePath);
+  return found.empty() ? std::string() : found.front();
+}
+
+LabelTable genericLabelTable(const std::vector<int>& values, const std::vector<int>& boneValues) {
+  LabelTable table;
+  table.source = "label values without names";
+  const std::set<int> bones(boneValues.begin(), boneValues.end());
+  for (int v : std::set<int>(values.begin(), values.end()))
+    if (v != 0) table.labels.push_back({v, "label_" + std::to_string(v), bones.count(v) ? LabelKind::Bone : LabelKind::Soft});
+  return table;
 }
 
 LabelTable builtinTotalSegmentatorTable() {
   LabelTable table;
+  table.source = "the built-in TotalSegmentator table";
   for (int i = 0; i < kTotalSegmentatorCount; ++i)
     table.labels.push_back({i + 1, kTotalSegmentatorNames[i], inferLabelKind(kTotalSegmentatorNames[i])});
   return table;
