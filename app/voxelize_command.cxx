@@ -46,6 +46,10 @@ const char* kVoxelizeUsage =
     "  inward pieces inside others (a skull's inner table) are carved out and inside-out surfaces turned; each\n"
     "  part's line says what was repaired. A surface too open to have an inside (an open sheet, a dish) is an\n"
     "  error; bones partly outside the skin are kept and reported.\n"
+    "  Bones are solid: a hollow a bone's surface walls in (a cortical shell's marrow and cancellous bone, as the\n"
+    "  hip bones of atlases come) is filled as bone when the largest ball it holds has a radius of at most\n"
+    "  --max-marrow-radius; a wider one (a skull's cranial cavity) stays a cavity. Each bone's line gives its\n"
+    "  shell volume (what the surface encloses) and its solid volume.\n"
     "  --skin MESH             the body's outer surface (required)\n"
     "  --skin-name NAME        label name of the skin's interior (default soft_tissue)\n"
     "  --bone NAME=MESH        a bone surface (repeatable); names like hip_left, sacrum, femur_left, patella_left,\n"
@@ -59,6 +63,9 @@ const char* kVoxelizeUsage =
     "  --unit-mm MM            millimetres per mesh unit (default 1; e.g. 10 for centimetres)\n"
     "  --padding VOXELS        background voxels around the skin (default 2)\n"
     "  --max-voxels N          largest grid accepted (default 536870912)\n"
+    "  --max-marrow-radius MM  widest hollow filled as bone: radius of the largest ball it holds (default 30;\n"
+    "                          cancellous bone holds balls of up to about 25 mm, a cranial cavity 50 mm or more)\n"
+    "  --hollow-bones          keep bones as their surfaces enclose them: shells stay shells, hollows are reported\n"
 
     "  --skeleton-out FILE     also build skeleton.json with the automatic rig (see 'repose rig'); it needs\n"
     "                          bones named as the rig knows them (femur_left, tibia_left, hip_left, ...)\n"
@@ -69,13 +76,16 @@ namespace {
 struct Args {
   std::map<std::string, std::string> single;
   std::vector<std::pair<std::string, std::string>> repeated;  // (option, value) in order
+  std::set<std::string> flags;
   bool help = false;
 };
 
 Args parse(int argc, char** argv, int first) {
-  const std::set<std::string> valued{"skin",      "skin-name",  "voxel", "reference",    "out",    "unit-mm",
-                                     "padding",   "max-voxels", "skeleton-out", "max-gap"};
+  const std::set<std::string> valued{"skin",    "skin-name",  "voxel",        "reference", "out",
+                                     "unit-mm", "padding",    "max-voxels",   "skeleton-out", "max-gap",
+                                     "max-marrow-radius"};
   const std::set<std::string> repeatable{"bone", "tissue", "bones-split"};
+  const std::set<std::string> flags{"hollow-bones"};
   Args a;
   for (int i = first; i < argc; ++i) {
     std::string arg = argv[i];
@@ -85,6 +95,10 @@ Args parse(int argc, char** argv, int first) {
     }
     if (arg.rfind("--", 0) != 0) throw VoxelizeUsageError("unexpected argument '" + arg + "'");
     std::string name = arg.substr(2);
+    if (flags.count(name)) {
+      a.flags.insert(name);
+      continue;
+    }
     if (!valued.count(name) && !repeatable.count(name)) throw VoxelizeUsageError("unknown option --" + name);
     if (i + 1 >= argc) throw VoxelizeUsageError("option --" + name + " needs a value");
     const std::string value = argv[++i];
@@ -189,6 +203,9 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   if (options.padVoxels < 0) throw VoxelizeUsageError("--padding must not be negative");
   if (!(maxVoxels >= 1)) throw VoxelizeUsageError("--max-voxels must be at least 1");
   options.maxVoxels = std::size_t(maxVoxels);
+  options.maxMarrowRadiusMm = number(a, "max-marrow-radius", kMaxMarrowRadiusMm);
+  if (!(options.maxMarrowRadiusMm >= 0)) throw VoxelizeUsageError("--max-marrow-radius must not be negative");
+  options.hollowBones = a.flags.count("hollow-bones") != 0;
   const double maxGap = number(a, "max-gap", 6.0);
   for (const auto& [opt, value] : a.repeated) nameAndFile(opt, value);  // usage errors before any reading
 

@@ -6,7 +6,7 @@ usage: /usr/bin/python3 scripts/benchmark_voxelize.py [--data ../shared/data/vis
        [--subjects female male] [--voxels 3 2] [--repose build/bin/repose] [--work DIR]
 Each case runs the CLI once under /usr/bin/time -v, as a user runs it. Prints two Markdown tables:
 per case (grid, voxelizing time, wall and CPU time, peak memory) and per part (triangles, what was
-repaired, voxel volume against the mesh's, seconds)."""
+repaired, voxel volume against the mesh's, the bone's solid volume with its hollows filled, seconds)."""
 import argparse
 import os
 import re
@@ -18,8 +18,8 @@ import tempfile
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BONES = ["sacrum", "coccyx", "hip_left", "hip_right", "femur_left", "femur_right", "patella_left", "patella_right",
          "tibia_left", "tibia_right", "fibula_left", "fibula_right"]
-PART = re.compile(r"^\s+\d+ (\S+) \((\w+), .*?\): (\d+) triangles, (.*): (\d+) voxels, ([\d.]+ (?:ml|L)) "
-                  r"\(the mesh encloses (?:about )?([\d.]+ (?:ml|L))\); ([\d.]+) s$")
+PART = re.compile(r"^\s+\d+ (\S+) \((\w+), .*?\): (\d+) triangles, (.*): (?:shell )?(\d+) voxels, ([\d.]+ (?:ml|L)) "
+                  r"\(the mesh encloses (?:about )?([\d.]+ (?:ml|L))\)(?:, solid \d+ voxels, ([\d.]+ (?:ml|L)))?; ([\d.]+) s$")
 
 
 def timed(cmd):
@@ -63,13 +63,13 @@ def main():
                 m = PART.match(line)
                 if not m:
                     continue
-                name, role, triangles, repairs, _, volume, mesh, seconds = m.groups()
+                name, role, triangles, repairs, _, volume, mesh, solid, seconds = m.groups()
                 if role == "skin":
                     skin += float(seconds)
                 else:
                     bones += float(seconds)
                 if voxel == a.voxels[0]:
-                    parts.append((subject, name, triangles, repairs, volume, mesh, seconds))
+                    parts.append((subject, name, triangles, repairs, volume, mesh, solid or volume, seconds))
             cases.append((subject, voxel, grid, skin, bones, voxelizing, wall, cpu, peak))
     print(f"\nrepose voxelize, Visible Human skin + {len(BONES)} bones\n")
     print("| subject | voxel (mm) | grid | skin (s) | bones (s) | voxelizing (s) | wall (s) | CPU (s) | peak memory (MB) |")
@@ -77,8 +77,8 @@ def main():
     for s, v, g, sk, bo, vz, w, c, p in cases:
         print(f"| {s} | {v:g} | {g} | {sk:.2f} | {bo:.2f} | {vz:.2f} | {w:.2f} | {c:.2f} | {p:.0f} |")
     print(f"\nper part at {a.voxels[0]:g} mm\n")
-    print("| subject | part | triangles | repaired | voxel volume | mesh volume | seconds |")
-    print("|---|---|---|---|---|---|---|")
+    print("| subject | part | triangles | repaired | voxel volume | mesh volume | solid volume | seconds |")
+    print("|---|---|---|---|---|---|---|---|")
     for row in parts:
         print("| " + " | ".join(row) + " |")
     if not a.work:

@@ -343,6 +343,63 @@ TEST(MeshVoxelizer, LabelsPrioritiesWarningsAndGrid) {
   EXPECT_THROW(voxelizeLabels(twice, ImageGrid{}, o), std::invalid_argument);
 }
 
+TEST(MeshVoxelizer, BonesAreSolidWideCavitiesStayAndTheReportSaysSo) {
+  // Two bones: a cortical shell 1 mm thick around marrow of radius 14 mm, and a skull-like shell
+  // 12 mm thick around a cavity of radius 40 mm; and a tissue shaped as the first (not a bone).
+  auto shell = [](const Eigen::Vector3d& c, double outer, double inner) {
+    TriangleMesh in = sphere(c, inner);
+    in.F.col(1).swap(in.F.col(2));
+    return concat(sphere(c, outer), in);
+  };
+  auto ball = [](double r) { return 4.0 / 3.0 * M_PI * r * r * r; };
+  const TriangleMesh body = box({-60.3, -60.3, -130.3}, {60.3, 60.3, 90.3});
+  const TriangleMesh marrow = shell({0, 0, -70}, 15, 14), skull = shell({0, 0, 30}, 52, 40),
+                     sac = shell({0, 0, -110}, 15, 14);
+  const std::vector<VoxelizePart> parts{{"soft_tissue", "skin.vtp", VoxelizeRole::Skin, body.V, body.F},
+                                        {"femur_left", "femur.stl", VoxelizeRole::Bone, marrow.V, marrow.F},
+                                        {"skull", "skull.stl", VoxelizeRole::Bone, skull.V, skull.F},
+                                        {"bladder", "bladder.stl", VoxelizeRole::Tissue, sac.V, sac.F}};
+  LabelVoxelizeOptions o;
+  o.voxelMm = 2.0;
+  const LabelVoxelization r = voxelizeLabels(parts, ImageGrid{}, o);
+  const VoxelizedPart &femur = r.parts[1], &head = r.parts[2], &bladder = r.parts[3];
+  EXPECT_NEAR(femur.solidVolume, ball(15), 0.04 * ball(15));
+  EXPECT_NEAR(femur.voxelVolume, ball(15) - ball(14), 0.25 * (ball(15) - ball(14)));
+  EXPECT_EQ(femur.labelledVoxels, femur.solidVoxels);
+  EXPECT_EQ(head.solidVoxels, head.voxels);
+  EXPECT_EQ(head.labelledVoxels, head.voxels);
+  EXPECT_NEAR(double(head.hollows.wideVoxels) * 8.0, ball(40), 0.04 * ball(40));
+  EXPECT_TRUE(bladder.hollows.hollows.empty());  // only bones are looked into
+  auto labelAt = [&](const LabelVoxelization& v, double z) {
+    const Eigen::Vector3d ijk = v.labels.grid.physicalToIndex({0.5, 0.5, z});
+    return v.labels.at(int(std::lround(ijk.x())), int(std::lround(ijk.y())), int(std::lround(ijk.z())));
+  };
+  EXPECT_EQ(labelAt(r, -70), 2);   // marrow is bone
+  EXPECT_EQ(labelAt(r, 30), 1);    // the cranial cavity is soft tissue
+  EXPECT_EQ(labelAt(r, -110), 1);  // so is the tissue's hollow
+  const std::string text = r.text();
+  EXPECT_NE(text.find("femur.stl): " + std::to_string(femur.topology.triangles) +
+                      " triangles, 2 pieces, 1 cavities carved; filled "),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find(" of hollow interior (1 hollow, radius up to 1"), std::string::npos) << text;
+  EXPECT_NE(text.find(": shell " + std::to_string(femur.voxels) + " voxels, "), std::string::npos) << text;
+  EXPECT_NE(text.find(", solid " + std::to_string(femur.solidVoxels) + " voxels, "), std::string::npos) << text;
+  EXPECT_NE(text.find("kept 1 cavity of 2"), std::string::npos) << text;
+  EXPECT_NE(text.find("room for an organ"), std::string::npos) << text;
+  // Hollow bones: the shell is labelled, the solid still reported.
+  o.hollowBones = true;
+  const LabelVoxelization h = voxelizeLabels(parts, ImageGrid{}, o);
+  EXPECT_EQ(h.parts[1].labelledVoxels, femur.voxels);
+  EXPECT_EQ(h.parts[1].solidVoxels, femur.solidVoxels);
+  EXPECT_EQ(labelAt(h, -70), 1);
+  EXPECT_NE(h.text().find("left open "), std::string::npos) << h.text();
+  // A narrower marrow limit keeps the marrow as a cavity.
+  o.hollowBones = false;
+  o.maxMarrowRadiusMm = 5;
+  EXPECT_EQ(voxelizeLabels(parts, ImageGrid{}, o).parts[1].labelledVoxels, femur.voxels);
+}
+
 TEST(MeshVoxelizer, BadInput) {
   const TriangleMesh b = box({0, 0, 0}, {1, 1, 1});
   const ImageGrid g = cube(-2, 2, 1);

@@ -58,6 +58,7 @@ void ToTriangles(vtkPolyData* mesh, repose::MeshVertices& V, repose::MeshTriangl
 
 vtkReposeMeshVoxelizer::vtkReposeMeshVoxelizer()
 {
+  this->MaxMarrowRadius = repose::kMaxMarrowRadiusMm;
   this->SetNumberOfInputPorts(1);
   this->SetNumberOfOutputPorts(1);
 }
@@ -233,6 +234,8 @@ int vtkReposeMeshVoxelizer::RequestData(
     options.voxelMm = this->VoxelSize;
     options.padVoxels = this->PaddingVoxels;
     options.maxVoxels = static_cast<std::size_t>(this->MaxVoxels);
+    options.maxMarrowRadiusMm = this->MaxMarrowRadius;
+    options.hollowBones = this->HollowBones;
     repose::ImageGrid grid;
     if (this->ReferenceImage)
     {
@@ -278,6 +281,8 @@ void vtkReposeMeshVoxelizer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "VoxelSize: " << this->VoxelSize << "\n";
   os << indent << "PaddingVoxels: " << this->PaddingVoxels << "\n";
   os << indent << "MaxVoxels: " << this->MaxVoxels << "\n";
+  os << indent << "MaxMarrowRadius: " << this->MaxMarrowRadius << "\n";
+  os << indent << "HollowBones: " << this->HollowBones << "\n";
   os << indent << "ReferenceImage: " << this->ReferenceImage.GetPointer() << "\n";
   os << indent << "Parts: " << this->PartNames.size() << " named\n";
 }

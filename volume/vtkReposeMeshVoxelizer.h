@@ -7,7 +7,8 @@
 // fans), points in physical LPS millimetres. By default connection 0 is the skin (its interior becomes
 // soft tissue, label 1) and the others are bones; SetPartName/SetPartRole/SetPartSource change that.
 // Output: vtkImageData with int scalars "Labels": 0 background, 1 skin interior, then the bones and
-// the tissues in connection order. Bones win over tissues over skin.
+// the tissues in connection order. Bones win over tissues over skin. Bones are solid: the thin
+// hollows their surfaces wall in are filled (MaxMarrowRadius, HollowBones).
 // The lattice is the reference image's (SetReferenceImage) when given, else axis-aligned cubic voxels
 // of VoxelSize fitted to the skin's bounds plus PaddingVoxels. More than MaxVoxels voxels is an error.
 // After Update(): GetLabelTableTSV() (value, name, kind: what `repose prepare --label-table` reads),
@@ -56,6 +57,17 @@ public:
   vtkSetClampMacro(MaxVoxels, double, 1.0, 1e15);
   vtkGetMacro(MaxVoxels, double);
 
+  /// Bones are solid: a hollow a bone's surface walls in (a cortical shell's marrow) is bone when the
+  /// largest ball it holds has at most this radius in mm (default 30); wider ones (a cranial cavity)
+  /// stay cavities.
+  vtkSetClampMacro(MaxMarrowRadius, double, 0.0, 1e6);
+  vtkGetMacro(MaxMarrowRadius, double);
+  /// Keep bones as their surfaces enclose them: shells stay shells (default off). The report still
+  /// gives each bone's shell and solid volumes.
+  vtkSetMacro(HollowBones, bool);
+  vtkGetMacro(HollowBones, bool);
+  vtkBooleanMacro(HollowBones, bool);
+
   /// Optional lattice (origin, spacing, direction, extent) of the output; its scalars are not used.
   void SetReferenceImage(vtkImageData* image);
   vtkImageData* GetReferenceImage();
@@ -78,6 +90,8 @@ protected:
   double VoxelSize = 1.0;
   double PaddingVoxels = 2.0;
   double MaxVoxels = 536870912.0;
+  double MaxMarrowRadius = 30.0;
+  bool HollowBones = false;
   vtkSmartPointer<vtkImageData> ReferenceImage;
   std::map<int, std::string> PartNames, PartSources;
   std::map<int, int> PartRoles;

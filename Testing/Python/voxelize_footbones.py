@@ -1,6 +1,7 @@
 """`repose voxelize --bones-split`: footbones.ply (26 separate bones in one file) split into its
 connected pieces, each its own label inside a synthetic skin (a box around the bones), each piece's
-voxels where the piece is; and bad input: a missing mesh, an open dish, too many voxels -> a one-line
+voxels where the piece is; and bad input: a missing mesh, an open dish, too many voxels, a negative
+marrow radius -> a one-line
 error naming the file, a non-zero exit and no output."""
 import os
 import shutil
@@ -109,6 +110,8 @@ cases = [
     ("open dish", ["--skin", f"{work}/bowl.obj", "--voxel", 1], "bowl.obj: the surface is not closed enough"),
     ("too many voxels", ["--skin", f"{work}/skin.stl", "--unit-mm", UNIT, "--voxel", 0.01], "skin.stl:"),
     ("bad bone option", ["--skin", f"{work}/skin.stl", "--voxel", 1, "--bone", "femur.stl"], "NAME=MESH"),
+    ("negative marrow radius", ["--skin", f"{work}/skin.stl", "--voxel", 1, "--max-marrow-radius", -2],
+     "--max-marrow-radius must not be negative"),
 ]
 for what, args, expect in cases:
     target = f"{work}/bad/{what.replace(' ', '_')}.nii.gz"

@@ -156,6 +156,7 @@ MeshVoxelization voxelizeMesh(const MeshVertices& V, const MeshTriangles& F, con
   WindingInsideOptions o;
   o.holeReach = options.holeReach;
   static_cast<WindingInside&>(r) = insideByWindingNumber(V, soup.F, grid, o);
+  if (options.findHollows) r.hollows = fillEnclosedHollows(V, soup.F, grid, r, options.hollows);
   return r;
 }
 
@@ -218,6 +219,24 @@ std::string repairs(const VoxelizedPart& p) {
   return out.substr(0, out.size() - 2);
 }
 
+/// What a bone's hollows became, or "" when it has none.
+std::string hollowsText(const EnclosedHollows& h, double voxelVolume) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1);
+  std::size_t thin = 0;
+  for (const auto& x : h.hollows) thin += x.thin;
+  if (thin > 0)
+    s << (h.filled ? "filled " : "left open ") << volumeText(double(h.thinVoxels) * voxelVolume)
+      << " of hollow interior (" << thin << (thin == 1 ? " hollow" : " hollows") << ", radius up to "
+      << h.largestThinRadiusMm << " mm), ";
+  if (thin < h.hollows.size())
+    s << "kept " << h.hollows.size() - thin << (h.hollows.size() - thin == 1 ? " cavity" : " cavities") << " of "
+      << volumeText(double(h.wideVoxels) * voxelVolume) << " (radius " << h.smallestWideRadiusMm
+      << " mm or more: room for an organ), ";
+  std::string out = s.str();
+  return out.empty() ? out : out.substr(0, out.size() - 2);
+}
+
 }  // namespace
 
 std::string LabelVoxelization::text() const {
@@ -226,12 +245,16 @@ std::string LabelVoxelization::text() const {
   s << "grid " << g.dims[0] << "x" << g.dims[1] << "x" << g.dims[2] << " voxels of " << g.spacing.x() << " x "
     << g.spacing.y() << " x " << g.spacing.z() << " mm, origin (" << g.origin.x() << ", " << g.origin.y() << ", "
     << g.origin.z() << ")\n";
+  const double voxelVolume = g.spacing.prod();
   for (const auto& p : parts) {
+    const bool bone = p.role == VoxelizeRole::Bone;
+    const std::string hollows = bone ? hollowsText(p.hollows, voxelVolume) : "";
     s << "  " << p.label << " " << p.name << " (" << roleName(p.role) << ", " << (p.source.empty() ? p.name : p.source)
-      << "): " << p.topology.triangles << " triangles, " << repairs(p) << ": " << p.voxels << " voxels, "
-      << volumeText(p.voxelVolume) << " (the mesh encloses " << (p.topology.holes > 0 ? "about " : "")
-      << volumeText(p.topology.enclosedVolume) << "); " << std::fixed << std::setprecision(2) << p.seconds << " s\n"
-      << std::defaultfloat;
+      << "): " << p.topology.triangles << " triangles, " << repairs(p) << (hollows.empty() ? "" : "; " + hollows)
+      << ": " << (bone ? "shell " : "") << p.voxels << " voxels, " << volumeText(p.voxelVolume) << " (the mesh encloses "
+      << (p.topology.holes > 0 ? "about " : "") << volumeText(p.topology.enclosedVolume) << ")";
+    if (bone) s << ", solid " << p.solidVoxels << " voxels, " << volumeText(p.solidVolume);
+    s << "; " << std::fixed << std::setprecision(2) << p.seconds << " s\n" << std::defaultfloat;
   }
   for (const auto& w : warnings) s << "warning: " << w << "\n";
   return s.str();
@@ -248,6 +271,9 @@ VoxelizedPart judge(const VoxelizePart& p, const MeshVoxelization& m, double vox
   rep.role = p.role;
   rep.voxels = m.insideVoxels;
   rep.voxelVolume = double(m.insideVoxels) * voxelVolume;
+  rep.hollows = m.hollows;
+  rep.solidVoxels = m.insideVoxels + (p.role == VoxelizeRole::Bone ? m.hollows.thinVoxels : 0);
+  rep.solidVolume = double(rep.solidVoxels) * voxelVolume;
   rep.overlapVolume = double(m.overlapVoxels) * voxelVolume;
   rep.meanInsideWinding = m.meanInsideWinding;
   rep.topology = m.topology;
@@ -340,8 +366,14 @@ LabelVoxelization voxelizeLabels(const std::vector<VoxelizePart>& parts, const I
     const int label = int(n) + 1;
     MeshVoxelization m;
     const auto started = std::chrono::steady_clock::now();
+    MeshVoxelizeOptions meshOptions = options.mesh;
+    if (p.role == VoxelizeRole::Bone) {
+      meshOptions.findHollows = true;
+      meshOptions.hollows.fill = !options.hollowBones;
+      meshOptions.hollows.maxFillRadiusMm = options.maxMarrowRadiusMm;
+    }
     try {
-      m = voxelizeMesh(p.V, p.F, grid, options.mesh);
+      m = voxelizeMesh(p.V, p.F, grid, meshOptions);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(where(p) + ": " + e.what());
     }
@@ -386,7 +418,8 @@ LabelVoxelization voxelizeLabels(const std::vector<VoxelizePart>& parts, const I
         },
         1);
     if (p.role != VoxelizeRole::Skin) {
-      rep.outsideSkinFraction = double(outside) / double(m.insideVoxels);
+      const std::size_t painted = m.insideVoxels + (m.hollows.filled ? m.hollows.thinVoxels : 0);
+      rep.outsideSkinFraction = double(outside) / double(painted);
       if (outside > 0)
         out.warnings.push_back(at + ": " + percent(rep.outsideSkinFraction) + " of " + p.name + " (" +
                                std::to_string(outside) + " voxels) lies outside the skin; kept in the body");

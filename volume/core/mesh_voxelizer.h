@@ -12,6 +12,7 @@
 
 #include "image_grid.h"
 #include "label_table.h"
+#include "enclosed_hollows.h"
 #include "mesh_topology.h"
 #include "winding_inside.h"
 
@@ -21,6 +22,10 @@ struct MeshVoxelizeOptions {
   /// Near each hole the winding number is evaluated within this many times the hole's radius of
   /// its middle (WindingInsideOptions::holeReach, at least 2); larger only costs time.
   double holeReach = 2.0;
+  /// Also find the hollows the surface encloses, filling the thin ones as `hollows` says
+  /// (enclosed_hollows.h); voxelizeLabels does for bones.
+  bool findHollows = false;
+  HollowOptions hollows;
 };
 
 /// What putting the orientation right changed (see voxelizeMesh).
@@ -36,6 +41,9 @@ struct OrientationRepairs {
 struct MeshVoxelization : WindingInside {
   OrientationRepairs repairs;
   MeshTopology topology;
+  /// With MeshVoxelizeOptions::findHollows: the hollows, whose thin ones `inside` then holds when
+  /// filled (insideVoxels counts the surface's own inside only).
+  EnclosedHollows hollows;
   /// Grid voxel (i,j,k) inside?
   bool at(int i, int j, int k) const {
     i -= boxMin[0], j -= boxMin[1], k -= boxMin[2];
@@ -49,8 +57,11 @@ struct MeshVoxelization : WindingInside {
 /// 1/2. Orientation is put right first: triangles are turned to agree with their neighbours
 /// (consistentlyOriented); then, piece by piece (meshPieces), a soup whose largest piece faces
 /// inward is turned, and a piece facing against the largest one is a cavity when it lies inside
-/// the others (a skull's inner table, a hollow bone: carved out) and is turned outward otherwise.
-/// Holes are spanned (WindingInside::meanInsideWinding says how well). Does not judge: see voxelizeLabels.
+/// the others (a skull's inner table, a hollow bone's inner wall: carved out) and is turned outward
+/// otherwise.
+/// Holes are spanned (WindingInside::meanInsideWinding says how well). With options.findHollows,
+/// the hollows it encloses are found and the thin ones filled (fillEnclosedHollows). Does not
+/// judge: see voxelizeLabels.
 /// Threaded; the result does not depend on the number of threads.
 /// Throws std::invalid_argument on an empty mesh, a bad index, a non-finite vertex or an empty grid.
 MeshVoxelization voxelizeMesh(const MeshVertices& V, const MeshTriangles& F, const ImageGrid& grid,
@@ -76,15 +87,23 @@ struct LabelVoxelizeOptions {
   double padVoxels = 2.0;      ///< background voxels around the skin's bounds
   std::size_t maxVoxels = std::size_t(512) << 20;
   MeshVoxelizeOptions mesh;
+  /// Bones are solid: the hollows a bone's surface encloses (a cortical shell's marrow) are bone up
+  /// to this radius (enclosed_hollows.h); wider ones (a cranial cavity) stay cavities.
+  double maxMarrowRadiusMm = kMaxMarrowRadiusMm;
+  /// Keep bones as their surfaces enclose them (shells stay shells); their hollows are still reported.
+  bool hollowBones = false;
 };
 
 struct VoxelizedPart {
   std::string name, source;
   VoxelizeRole role = VoxelizeRole::Bone;
   int label = 0;
-  std::size_t voxels = 0;          ///< voxels inside the surface
+  std::size_t voxels = 0;          ///< voxels inside the surface (w >= 1/2): a hollow bone's shell
+  std::size_t solidVoxels = 0;     ///< bones: voxels plus those of its thin hollows; else voxels
   std::size_t labelledVoxels = 0;  ///< voxels carrying its label in the result (after priorities)
-  double voxelVolume = 0;          ///< voxels x voxel volume (mm^3)
+  double voxelVolume = 0;          ///< voxels x voxel volume (mm^3): the shell's volume
+  double solidVolume = 0;          ///< solidVoxels x voxel volume (mm^3)
+  EnclosedHollows hollows;         ///< bones: the hollows it encloses, filled unless hollowBones
   MeshTopology topology;
   double outsideSkinFraction = 0;  ///< bones and tissues: fraction of their voxels outside the skin
   double overlapVolume = 0;        ///< mm^3 inside two of its pieces or more
@@ -109,7 +128,8 @@ struct LabelVoxelization {
 constexpr double kMinInsideWinding = 0.75;
 
 /// One label volume from one skin and any number of bones and tissues: the skin's interior gets the
-/// skin's label (soft tissue), each bone and tissue its own; where they overlap bones win over
+/// skin's label (soft tissue), each bone (solid, its thin hollows filled unless options.hollowBones)
+/// and tissue its own; where they overlap bones win over
 /// tissues over skin (between two bones, or two tissues, the first given). The grid is `grid` when
 /// its dims are non-zero, else gridFittingPoints(skin, options). Holes, overlapping pieces, cavities
 /// and inward pieces are repaired and reported in text(). A surface too open to have an inside (its

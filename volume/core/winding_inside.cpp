@@ -7,17 +7,16 @@
 #include <memory>
 #include <stdexcept>
 
+#include "lattice_crossings.h"
 #include "parallel_for.h"
 #include "winding_number.h"
 
 namespace repose {
 namespace {
 
-/// The index box of the soup and its voxels' physical centres.
-struct Box {
-  std::array<int, 3> min{0, 0, 0}, dims{0, 0, 0};
+/// The index box of the soup and its rows along i.
+struct Box : IndexBox {
   std::size_t nx = 0, ny = 0, rows = 0;  ///< rows: ny * nz lines of voxels along i
-  std::size_t count() const { return nx * rows; }
 };
 
 /// Index box of the vertices clipped to the grid (dims 0 when it misses the grid).
@@ -40,17 +39,29 @@ Box indexBox(const std::vector<Eigen::Vector3d>& points, const ImageGrid& grid, 
   return b;
 }
 
-/// The cones closing the boundary chain: cap triangles (apex, to, from) over the soup's vertices
-/// followed by one apex per connected piece of the chain, and each apex's reach.
-struct Cones {
-  MeshVertices V;
-  MeshTriangles F;
-  std::vector<Eigen::Vector3d> apex;
-  std::vector<double> radius;  ///< farthest chain vertex from the apex (mm)
+/// Box-local i range [lo, hi] of row (j, k) within `radius` mm of `centre` (empty: lo > hi).
+std::array<int, 2> rowInBall(const ImageGrid& g, const Box& box, int j, int k, const Eigen::Vector3d& centre,
+                             double radius) {
+  const Eigen::Vector3d axis = g.direction.col(0) * g.spacing.x();
+  const Eigen::Vector3d d = g.indexToPhysical(Eigen::Vector3d(box.min[0], j, k)) - centre;
+  const double qa = axis.squaredNorm(), qb = axis.dot(d), qc = d.squaredNorm() - radius * radius;
+  const double disc = qb * qb - qa * qc;
+  if (disc < 0) return {1, 0};
+  const double root = std::sqrt(disc);
+  return {std::max(0, int(std::ceil((-qb - root) / qa))), std::min(int(box.nx) - 1, int(std::floor((-qb + root) / qa)))};
+}
+
+/// Per-row results, summed in row order afterwards so the totals do not depend on the threads.
+struct RowTally {
+  std::size_t inside = 0, overlap = 0, evaluated = 0, evaluatedInside = 0;
+  double windingInside = 0;
 };
 
-Cones closingCones(const MeshVertices& V, const std::vector<std::vector<std::array<int, 2>>>& chain) {
-  Cones c;
+}  // namespace
+
+ClosingCones closingCones(const MeshVertices& V, const MeshTriangles& F) {
+  const std::vector<std::vector<std::array<int, 2>>> chain = boundaryChain(V, F);  // checks the indices
+  ClosingCones c;
   std::size_t edges = 0;
   for (const auto& piece : chain) edges += piece.size();
   c.V.resize(V.rows() + Eigen::Index(chain.size()), 3);
@@ -72,81 +83,13 @@ Cones closingCones(const MeshVertices& V, const std::vector<std::vector<std::arr
   return c;
 }
 
-/// Sign of orient(a, b, p) in the (y, z) plane with p moved by (eps, eps^2): never 0 for an edge
-/// of non-zero length, and computed from the edge's endpoints in one canonical order, so two
-/// triangles sharing an edge (or a vertex) agree exactly on which side of it p lies.
-int orientSign(Eigen::Vector2d a, Eigen::Vector2d b, const Eigen::Vector2d& p) {
-  const bool swapped = b.x() < a.x() || (b.x() == a.x() && b.y() < a.y());
-  if (swapped) std::swap(a, b);
-  double v = (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
-  if (v == 0) v = b.y() != a.y() ? a.y() - b.y() : b.x() - a.x();
-  const int s = v > 0 ? 1 : (v < 0 ? -1 : 0);
-  return swapped ? -s : s;
-}
-
-/// One crossing of a row's ray: the row, the last box-local voxel before it along i, +-1.
-struct Crossing {
-  std::uint32_t row;
-  int last;
-  int sign;
-};
-
-/// Crossings of the rows of `box` with triangle (a, b, c) (index space): the row's integer (j, k)
-/// lies in the triangle's (y, z) projection (perturbed as orientSign); the sign is the side the
-/// triangle's normal points along +i.
-void crossRows(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, int flip, const Box& box,
-               std::vector<Crossing>& out) {
-  const int j0 = std::max(box.min[1], int(std::ceil(std::min({a.y(), b.y(), c.y()}))));
-  const int j1 = std::min(box.min[1] + box.dims[1] - 1, int(std::floor(std::max({a.y(), b.y(), c.y()}))));
-  const int k0 = std::max(box.min[2], int(std::ceil(std::min({a.z(), b.z(), c.z()}))));
-  const int k1 = std::min(box.min[2] + box.dims[2] - 1, int(std::floor(std::max({a.z(), b.z(), c.z()}))));
-  const Eigen::Vector2d A(a.y(), a.z()), B(b.y(), b.z()), C(c.y(), c.z());
-  for (int k = k0; k <= k1; ++k)
-    for (int j = j0; j <= j1; ++j) {
-      const Eigen::Vector2d p(j, k);
-      const int sa = orientSign(B, C, p), sb = orientSign(C, A, p), sc = orientSign(A, B, p);
-      if (sa != sb || sb != sc || sa == 0) continue;
-      // Barycentric coordinates from the plain (unperturbed) areas give where the ray meets it.
-      const double wa = (C.x() - B.x()) * (p.y() - B.y()) - (C.y() - B.y()) * (p.x() - B.x());
-      const double wb = (A.x() - C.x()) * (p.y() - C.y()) - (A.y() - C.y()) * (p.x() - C.x());
-      const double wc = (B.x() - A.x()) * (p.y() - A.y()) - (B.y() - A.y()) * (p.x() - A.x());
-      const double sum = wa + wb + wc;
-      const double x = sum != 0 ? (wa * a.x() + wb * b.x() + wc * c.x()) / sum : (a.x() + b.x() + c.x()) / 3;
-      // Voxels i < x lie before the crossing.
-      const double last = std::ceil(x) - 1 - box.min[0];
-      if (last < 0) continue;
-      const std::uint32_t row = std::uint32_t(std::size_t(k - box.min[2]) * box.ny + std::size_t(j - box.min[1]));
-      out.push_back({row, int(std::min(last, double(box.nx - 1))), flip * sa});
-    }
-}
-
-/// Box-local i range [lo, hi] of row (j, k) within `radius` mm of `centre` (empty: lo > hi).
-std::array<int, 2> rowInBall(const ImageGrid& g, const Box& box, int j, int k, const Eigen::Vector3d& centre,
-                             double radius) {
-  const Eigen::Vector3d axis = g.direction.col(0) * g.spacing.x();
-  const Eigen::Vector3d d = g.indexToPhysical(Eigen::Vector3d(box.min[0], j, k)) - centre;
-  const double qa = axis.squaredNorm(), qb = axis.dot(d), qc = d.squaredNorm() - radius * radius;
-  const double disc = qb * qb - qa * qc;
-  if (disc < 0) return {1, 0};
-  const double root = std::sqrt(disc);
-  return {std::max(0, int(std::ceil((-qb - root) / qa))), std::min(int(box.nx) - 1, int(std::floor((-qb + root) / qa)))};
-}
-
-/// Per-row results, summed in row order afterwards so the totals do not depend on the threads.
-struct RowTally {
-  std::size_t inside = 0, overlap = 0, evaluated = 0, evaluatedInside = 0;
-  double windingInside = 0;
-};
-
-}  // namespace
-
 WindingInside insideByWindingNumber(const MeshVertices& V, const MeshTriangles& F, const ImageGrid& grid,
                                     const WindingInsideOptions& options) {
   if (grid.dims[0] <= 0 || grid.dims[1] <= 0 || grid.dims[2] <= 0) throw std::invalid_argument("the voxel grid is empty");
   if (!(options.holeReach >= 2.0)) throw std::invalid_argument("the hole reach must be at least 2");
   if (V.rows() == 0 || F.rows() == 0) throw std::invalid_argument("the surface has no triangles");
   if (!V.allFinite()) throw std::invalid_argument("the surface has a vertex that is not a finite number");
-  const Cones cones = closingCones(V, boundaryChain(V, F));  // checks the indices
+  const ClosingCones cones = closingCones(V, F);  // checks the indices
   std::vector<Eigen::Vector3d> points(std::size_t(cones.V.rows()));
   for (Eigen::Index v = 0; v < cones.V.rows(); ++v)
     points[std::size_t(v)] = grid.physicalToIndex(cones.V.row(v).transpose());
@@ -159,18 +102,18 @@ WindingInside insideByWindingNumber(const MeshVertices& V, const MeshTriangles& 
 
   // 1. Crossings of the closed chain S + C with every row, bucketed by row.
   const int flip = grid.direction.determinant() < 0 ? -1 : 1;
-  std::vector<Crossing> crossings;
+  std::vector<RowCrossing> crossings;
   auto at = [&](int v) -> const Eigen::Vector3d& { return points[std::size_t(v)]; };
-  for (Eigen::Index t = 0; t < F.rows(); ++t) crossRows(at(F(t, 0)), at(F(t, 1)), at(F(t, 2)), flip, box, crossings);
+  for (Eigen::Index t = 0; t < F.rows(); ++t) crossRows(at(F(t, 0)), at(F(t, 1)), at(F(t, 2)), 0, box, crossings);
   for (Eigen::Index t = 0; t < cones.F.rows(); ++t)
-    crossRows(at(cones.F(t, 0)), at(cones.F(t, 1)), at(cones.F(t, 2)), flip, box, crossings);
+    crossRows(at(cones.F(t, 0)), at(cones.F(t, 1)), at(cones.F(t, 2)), 0, box, crossings);
   std::vector<std::size_t> first(box.rows + 1, 0);
-  for (const Crossing& c : crossings) ++first[c.row + 1];
+  for (const RowCrossing& c : crossings) ++first[c.row + 1];
   for (std::size_t row = 0; row < box.rows; ++row) first[row + 1] += first[row];
-  std::vector<Crossing> byRow(crossings.size());
+  std::vector<RowCrossing> byRow(crossings.size());
   {
     std::vector<std::size_t> fill(first.begin(), first.end() - 1);
-    for (const Crossing& c : crossings) byRow[fill[c.row]++] = c;
+    for (const RowCrossing& c : crossings) byRow[fill[c.row]++] = c;
   }
 
   // 2. The cones' winding number, evaluated near them only.
@@ -199,7 +142,7 @@ WindingInside insideByWindingNumber(const MeshVertices& V, const MeshTriangles& 
         for (std::size_t row = row0; row < row1; ++row) {
           const int j = box.min[1] + int(row % box.ny), k = box.min[2] + int(row / box.ny);
           std::fill(closed.begin(), closed.end(), 0);
-          for (std::size_t c = first[row]; c < first[row + 1]; ++c) closed[std::size_t(byRow[c].last)] += byRow[c].sign;
+          for (std::size_t c = first[row]; c < first[row + 1]; ++c) closed[std::size_t(byRow[c].last)] += flip * byRow[c].sign;
           for (std::size_t i = box.nx - 1; i-- > 0;) closed[i] += closed[i + 1];
           std::fill(near.begin(), near.end(), 0);
           for (std::size_t c : conesAtK[std::size_t(k - box.min[2])]) {

@@ -43,6 +43,19 @@ struct WindingInside {
   bool outsideGrid = false;             ///< the soup's bounds miss the grid altogether
 };
 
+/// The cones closing a soup's boundary chain (boundaryChain: the rims of holes, orientation seams):
+/// one per connected piece of the chain, its apex the mean of the piece's vertices.
+struct ClosingCones {
+  MeshVertices V;   ///< the soup's vertices followed by one apex per cone
+  MeshTriangles F;  ///< cap triangles (apex, to, from) over the chain's edges (from, to)
+  std::vector<Eigen::Vector3d> apex;
+  std::vector<double> radius;  ///< farthest chain vertex from the apex (mm)
+};
+
+/// Cones closing the boundary chain of V (#V by 3), F (#F by 3): none for a closed soup. Throws
+/// std::invalid_argument on a bad index.
+ClosingCones closingCones(const MeshVertices& V, const MeshTriangles& F);
+
 /// Voxel centres of `grid` (any origin, spacing, direction) inside the soup V (#V by 3, physical
 /// mm, the grid's frame) F (#F by 3) by w >= 1/2, as the triangles are oriented (outward: w = 1
 /// inside; an inward piece inside an outward one subtracts). Threaded over rows; the result does
