@@ -105,37 +105,6 @@ MeshVoxelizeOptions withHollows(double maxRadius = kMaxMarrowRadiusMm, bool fill
 
 }  // namespace
 
-TEST(DistanceTransform, MatchesBruteForceWithAnisotropicSpacing) {
-  const std::array<int, 3> dims{9, 7, 6};
-  const Eigen::Vector3d h(0.7, 1.0, 1.3);
-  std::mt19937 rng(3);
-  std::vector<std::uint8_t> mask(9 * 7 * 6);
-  for (auto& m : mask) m = rng() % 5 != 0;  // mostly set, so distances reach across the box
-  const std::vector<double> d2 = squaredDistanceToUnset(mask, dims, h);
-  // Brute force: every unset voxel, and the layer of voxels just beyond the box, which counts as unset.
-  for (int k = 0; k < 6; ++k)
-    for (int j = 0; j < 7; ++j)
-      for (int i = 0; i < 9; ++i) {
-        const std::size_t v = (std::size_t(k) * 7 + std::size_t(j)) * 9 + std::size_t(i);
-        double best = mask[v] ? INFINITY : 0.0;
-        for (int c = -1; c <= 6 && mask[v]; ++c)
-          for (int b = -1; b <= 7; ++b)
-            for (int a = -1; a <= 9; ++a) {
-              const bool beyond = a < 0 || b < 0 || c < 0 || a >= 9 || b >= 7 || c >= 6;
-              if (!beyond && mask[(std::size_t(c) * 7 + std::size_t(b)) * 9 + std::size_t(a)]) continue;
-              const Eigen::Vector3d e = h.cwiseProduct(Eigen::Vector3d(a - i, b - j, c - k));
-              best = std::min(best, e.squaredNorm());
-            }
-        ASSERT_NEAR(d2[v], best, 1e-9) << i << " " << j << " " << k;
-      }
-  // A single set voxel in the middle of unset ones: its nearest neighbour along the finest axis.
-  std::vector<std::uint8_t> one(27, 0);
-  one[13] = 1;
-  EXPECT_DOUBLE_EQ(squaredDistanceToUnset(one, {3, 3, 3}, h)[13], 0.49);
-  EXPECT_THROW(squaredDistanceToUnset(one, {3, 3, 2}, h), std::invalid_argument);
-  EXPECT_THROW(squaredDistanceToUnset(one, {3, 3, 3}, Eigen::Vector3d(1, 0, 1)), std::invalid_argument);
-}
-
 TEST(LatticeCrossings, BoxFacesAlongEveryAxis) {
   // A box with its faces halfway between lattice points, in grid indices: each row through it
   // enters (normal against the row, -1) after the voxel before its low face and leaves (+1) after

@@ -122,15 +122,17 @@ double radiusOf(const Lattice& L, const std::vector<std::size_t>& voxels, const 
     const std::array<int, 3> c = L.coords(v);
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
   }
-  const std::array<int, 3> dims{hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
-  std::vector<std::uint8_t> mask(std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]), 0);
+  // The hollow's box with one layer around it: the distance to the nearest voxel not of the hollow.
+  MaskVolume notHollow;
+  notHollow.grid.dims = {hi[0] - lo[0] + 3, hi[1] - lo[1] + 3, hi[2] - lo[2] + 3};
+  notHollow.grid.spacing = spacing;
+  notHollow.data.assign(notHollow.grid.voxelCount(), 1);
   for (std::size_t v : voxels) {
     const std::array<int, 3> c = L.coords(v);
-    mask[(std::size_t(c[2] - lo[2]) * std::size_t(dims[1]) + std::size_t(c[1] - lo[1])) * std::size_t(dims[0]) +
-         std::size_t(c[0] - lo[0])] = 1;
+    notHollow.at(c[0] - lo[0] + 1, c[1] - lo[1] + 1, c[2] - lo[2] + 1) = 0;
   }
-  const std::vector<double> d2 = squaredDistanceToUnset(mask, dims, spacing);
-  return std::sqrt(*std::max_element(d2.begin(), d2.end()));
+  const std::vector<float> d = distanceToFeatures(notHollow);
+  return double(*std::max_element(d.begin(), d.end()));
 }
 
 }  // namespace
