@@ -224,13 +224,15 @@ const char* kAnimateUsage =
     "  the FEM's time, Newton and CG iterations, inverted tets, continuation steps, the strained region's\n"
     "  nodes and Newton iterations, and the nodes pinched between bones).\n"
     "  First it prints the clip's units and which skeleton joints the clip drives, and warns about\n"
-    "  recognised limb joints (left_knee, right_elbow, ...) that it does not drive: those only follow their\n"
-    "  parents. A clip that drives no joint of the skeleton is an error.\n"
+    "  recognised limb joints (left_knee, right_elbow, ...) that it does not drive and about joint names\n"
+    "  the built-in map does not know: those only follow their parents. A clip that drives no joint of the\n"
+    "  skeleton but its root is an error.\n"
     "  --map FILE        JSON {BVH joint: skeleton joint}. Default: the CMU clips (both conversions, LeftHip or\n"
     "                    LeftUpLeg names) onto the standard joint names: pelvis, spine, chest, vertebra_L4 ...,\n"
     "                    neck, head, left_/right_ hip, knee, ankle, shoulder, elbow, wrist, clavicle, scapula; the\n"
     "                    vertebrae share the clip's spine and neck rotations by spinal level\n"
-    "  --strict          a recognised limb joint that the clip does not drive is an error, not a warning\n"
+    "  --strict          a recognised limb joint that the clip does not drive, or (without --map) a joint name\n"
+    "                    the built-in map does not know, is an error, not a warning\n"
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
     "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*)\n"
@@ -823,14 +825,18 @@ std::unique_ptr<repose::BvhRetargeter> retargetClip(const Options& o, const repo
             << " joints: " << driven << "\n";
   if (!coverage.following.empty())
     std::cout << "animate: not driven, following their parents: " << joinNames(coverage.following) << "\n";
-  if (!coverage.undrivenLimbs.empty()) {
-    const std::string limbs = joinNames(coverage.undrivenLimbs);
+  std::vector<std::string> problems;
+  if (!coverage.undrivenLimbs.empty())
+    problems.push_back("the clip drives none of the limb joints " + joinNames(coverage.undrivenLimbs));
+  if (!coverage.unknownNames.empty() && !o.has("map"))
+    problems.push_back("the built-in map does not know the joint names " + joinNames(coverage.unknownNames) +
+                       " (standard names: see --help)");
+  for (const std::string& problem : problems) {
     if (o.has("strict"))
-      throw std::runtime_error(bvhPath + ": the clip drives none of the limb joints " + limbs +
-                               " (--strict): map them with --map FILE, JSON {\"BVH joint\": \"skeleton joint\"}");
-    std::cout << "animate: warning: the clip drives none of the limb joints " << limbs
-              << ": they only follow their parents; map them with --map FILE (JSON {\"BVH joint\": \"skeleton "
-                 "joint\"}), or --strict to stop here\n";
+      throw std::runtime_error(bvhPath + ": " + problem + " (--strict): map them with --map FILE, JSON " +
+                               "{\"BVH joint\": \"skeleton joint\"}");
+    std::cout << "animate: warning: " << problem << ": they only follow their parents; map them with --map FILE "
+              << "(JSON {\"BVH joint\": \"skeleton joint\"}), or --strict to stop here\n";
   }
   return retargeter;
 }

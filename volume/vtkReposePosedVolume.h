@@ -40,8 +40,9 @@ public:
   vtkGetMacro(PaddingVoxels, int);
 
   /// The output lattice is the rest image's, holding the posed body and, while that at most doubles
-  /// the voxels, the rest extent too (a pose in place keeps the rest voxel indices); a body that
-  /// moved away (root motion) gets a grid of its own size, its margin covering the extrapolation.
+  /// the rest image's voxels, the rest extent too (a pose in place keeps the rest voxel indices); a
+  /// body that moved away (root motion) gets a grid of its own size, its margin covering the
+  /// extrapolation.
   /// A grid of more than MaxVoxels voxels is an error that gives its size and the body's span
   /// (default 512 M = 5.12e8, 2 GB of labels; 0 = no limit).
   vtkSetClampMacro(MaxVoxels, double, 0, 1e15);

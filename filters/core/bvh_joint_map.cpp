@@ -141,6 +141,14 @@ bool isStandardLimbJoint(const std::string& name) {
   return false;
 }
 
+bool isStandardJointName(const std::string& name) {
+  static const char* const trunk[] = {"pelvis", "jaw", "left_patella", "right_patella"};
+  for (const char* t : trunk)
+    if (name == t) return true;
+  TrunkJoint level{0, 0, 0};
+  return isStandardLimbJoint(name) || trunkLevel(name, false, level);
+}
+
 BvhJointMap defaultCmuJointMap(const BvhMotion& motion, const Skeleton& skeleton) {
   const std::map<std::string, std::string> cmu = cmuNames(motion);
   BvhJointMap map;
@@ -231,8 +239,10 @@ JointMapCoverage jointMapCoverage(const Skeleton& skeleton, const BvhJointMap& m
     const bool girdleFollows = isGirdle(limb) && (driven(side + "clavicle") || driven(side + "scapula"));
     if (isStandardLimbJoint(joint.name) && !girdleFollows) {
       coverage.undrivenLimbs.push_back(joint.name);
-    } else {
+    } else if (isStandardJointName(joint.name)) {
       coverage.following.push_back(joint.name);
+    } else {
+      coverage.unknownNames.push_back(joint.name);
     }
   }
   return coverage;

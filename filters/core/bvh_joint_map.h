@@ -56,6 +56,9 @@ BvhJointMap readJointMapFile(const std::string& path);
 
 /// True for left_/right_ hip, knee, ankle, shoulder, elbow, wrist, clavicle, scapula.
 bool isStandardLimbJoint(const std::string& name);
+/// True for every standard name: the limb joints, pelvis, spine, chest, neck, head, jaw,
+/// vertebra_C1 ... vertebra_L5, left_/right_patella.
+bool isStandardJointName(const std::string& name);
 
 /// What a map drives, for the user.
 struct JointMapCoverage {
@@ -65,8 +68,10 @@ struct JointMapCoverage {
   /// Standard limb joints the map does not drive (they only follow their parents). A clavicle or
   /// scapula next to a driven one of the same side is not listed: clips have one shoulder girdle joint.
   std::vector<std::string> undrivenLimbs;
-  /// The other joints the map does not drive (they follow their parents).
+  /// Other standard joints the map does not drive: they follow their parents (jaw, patella, ...).
   std::vector<std::string> following;
+  /// Joints whose names are not standard: no built-in map can drive them (they follow their parents).
+  std::vector<std::string> unknownNames;
 };
 /// Throws std::invalid_argument if the map names a skeleton joint the skeleton lacks.
 JointMapCoverage jointMapCoverage(const Skeleton& skeleton, const BvhJointMap& map);

@@ -65,7 +65,8 @@ ImageGrid posedOutputGrid(const ImageGrid& rest, const Points& posedNodes, const
   const int bodyPadding = options.bodyPaddingVoxels < 0 ? options.paddingVoxels : options.bodyPaddingVoxels;
   const IndexBox body = padded(nodes, bodyPadding);
   IndexBox box = padded({nodes.lo.cwiseMin(restLo), nodes.hi.cwiseMax(restHi)}, options.paddingVoxels);
-  if (!(box.voxels() <= options.restExtentFactor * body.voxels())) box = body;
+  const double inPlace = std::max(padded({restLo, restHi}, options.paddingVoxels).voxels(), body.voxels());
+  if (!(box.voxels() <= options.restExtentFactor * inPlace)) box = body;
   if (options.maxVoxels > 0 && box.voxels() > options.maxVoxels) tooLarge(rest, box, nodes, options.maxVoxels);
   ImageGrid out = rest;
   for (int a = 0; a < 3; ++a) {

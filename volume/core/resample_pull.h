@@ -55,9 +55,10 @@ struct PosedGridOptions {
   /// Margin of a grid that holds the body only (below); negative = paddingVoxels. Give the
   /// extrapolation's reach (extrapolationReachVoxels) so that cropping never cuts the posed body.
   int bodyPaddingVoxels = -1;
-  /// The grid also holds the rest grid's extent while that at most multiplies the voxels of the
-  /// body's own (padded) box by this factor: a pose in place keeps the rest grid's indices. Beyond it
-  /// (the root moved away, e.g. along a walk) the grid holds the posed body only. 0 = body only.
+  /// The grid also holds the rest grid's extent while that keeps it within this factor of the
+  /// voxels of the (padded) rest grid or of the body's own box, whichever is larger: a pose in place
+  /// keeps the rest grid's voxel indices, as before. Beyond it (the root moved away, e.g. along a
+  /// walk) the grid holds the posed body only. 0 = the body only.
   double restExtentFactor = 2.0;
   /// Largest voxel count; a larger grid throws std::invalid_argument saying its size and the posed
   /// body's span (a body far from where it started: root motion, or motion read in the wrong unit).
