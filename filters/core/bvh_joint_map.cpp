@@ -1,9 +1,10 @@
 #include "bvh_joint_map.h"
 
+#include "anatomy_names.h"
+
 #include <json/json.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -44,11 +45,15 @@ const CmuJoint kCmuJoints[] = {
     {"right_wrist", "RightWrist", "RightHand"},
 };
 
-// Limb joint (without its side) -> the CMU role (without its side) that drives it.
-const std::pair<const char*, const char*> kLimbRoles[] = {
-    {"hip", "femur"},      {"knee", "tibia"},    {"ankle", "foot"},   {"shoulder", "humerus"},
-    {"elbow", "radius"},   {"wrist", "wrist"},   {"clavicle", "collar"}, {"scapula", "collar"},
-};
+// The CMU role (without its side) that drives a limb or girdle joint of the vocabulary (without its
+// side); "" for none.
+std::string cmuLimbRole(const std::string& limb) {
+  static const std::map<std::string, std::string> roles = {
+      {"hip", "femur"},    {"knee", "tibia"},  {"ankle", "foot"},      {"shoulder", "humerus"},
+      {"elbow", "radius"}, {"wrist", "wrist"}, {"clavicle", "collar"}, {"scapula", "collar"}};
+  const auto it = roles.find(limb);
+  return it == roles.end() ? "" : it->second;
+}
 
 // Spinal levels as one axis: L5 = 0 ... L1 = 4, T12 = 5 ... T1 = 16, C7 = 17 ... C1 = 23, skull = 24.
 // A joint at level l moves the bones from l up, relative to the bone below.
@@ -64,20 +69,27 @@ struct TrunkJoint {
   double level, topEnd;  // topEnd: where its bone ends when no trunk joint lies above it
 };
 
-bool trunkLevel(const std::string& name, bool hasHead, TrunkJoint& t) {
+// A cervical joint below the skull: a head joint above it, or vertebrae of the neck beside it.
+bool neckIsCervical(const Skeleton& skeleton) {
+  if (skeleton.find("head") >= 0) return true;
+  for (const Joint& j : skeleton.joints)
+    if (j.name.compare(0, 10, "vertebra_C") == 0) return true;
+  return false;
+}
+
+bool trunkLevel(const std::string& name, bool cervicalNeck, TrunkJoint& t) {
   if (name == "spine") return t.level = 0, t.topEnd = 5, true;
   if (name == "chest") return t.level = 5, t.topEnd = 17, true;
-  if (name == "neck") return hasHead ? (t.level = 17, t.topEnd = 24) : (t.level = 24, t.topEnd = 25), true;
+  if (name == "neck") return cervicalNeck ? (t.level = 17, t.topEnd = 24) : (t.level = 24, t.topEnd = 25), true;
   if (name == "head") return t.level = 24, t.topEnd = 25, true;
+  // vertebra_<level> of the vocabulary; sacral levels belong to the pelvis.
   const std::string prefix = "vertebra_";
-  if (name.size() < prefix.size() + 2 || name.compare(0, prefix.size(), prefix) != 0) return false;
+  if (name.compare(0, prefix.size(), prefix) != 0 || !isStandardJointName(name)) return false;
   const char region = name[prefix.size()];
-  const std::string digits = name.substr(prefix.size() + 1);
-  if (digits.empty() || digits.size() > 2 || !std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; })) return false;
-  const int n = std::stoi(digits);
-  if (region == 'L' && n >= 1 && n <= 5) t.level = 5 - n;
-  else if (region == 'T' && n >= 1 && n <= 12) t.level = 17 - n;
-  else if (region == 'C' && n >= 1 && n <= 7) t.level = 24 - n;
+  const int n = std::stoi(name.substr(prefix.size() + 1));
+  if (region == 'L') t.level = 5 - n;
+  else if (region == 'T') t.level = 17 - n;
+  else if (region == 'C') t.level = 24 - n;
   else return false;
   t.topEnd = t.level + 1;
   return true;
@@ -101,11 +113,11 @@ std::map<std::string, std::string> cmuNames(const BvhMotion& motion) {
 
 // Trunk joints of the skeleton, lowest level first, with the CMU trunk joints' shares.
 void mapTrunk(const Skeleton& skeleton, const std::map<std::string, std::string>& cmu, BvhJointMap& map) {
-  const bool hasHead = skeleton.find("head") >= 0;
+  const bool cervicalNeck = neckIsCervical(skeleton);
   std::vector<TrunkJoint> trunk;
   for (int j = 0; j < int(skeleton.size()); ++j) {
     TrunkJoint t{j, 0, 0};
-    if (trunkLevel(skeleton.joints[j].name, hasHead, t)) trunk.push_back(t);
+    if (trunkLevel(skeleton.joints[j].name, cervicalNeck, t)) trunk.push_back(t);
   }
   std::stable_sort(trunk.begin(), trunk.end(), [](const TrunkJoint& a, const TrunkJoint& b) { return a.level < b.level; });
   for (std::size_t i = 0; i < trunk.size(); ++i) {
@@ -123,31 +135,11 @@ void mapTrunk(const Skeleton& skeleton, const std::map<std::string, std::string>
 }
 
 std::string sidePrefix(const std::string& name) {
-  if (name.compare(0, 5, "left_") == 0) return "left_";
-  if (name.compare(0, 6, "right_") == 0) return "right_";
-  return "";
+  const BoneSide side = jointSide(name);
+  return side == BoneSide::Left ? "left_" : side == BoneSide::Right ? "right_" : "";
 }
-
-bool isGirdle(const std::string& limb) { return limb == "clavicle" || limb == "scapula"; }
 
 }  // namespace
-
-bool isStandardLimbJoint(const std::string& name) {
-  const std::string side = sidePrefix(name);
-  if (side.empty()) return false;
-  const std::string limb = name.substr(side.size());
-  for (const auto& entry : kLimbRoles)
-    if (limb == entry.first) return true;
-  return false;
-}
-
-bool isStandardJointName(const std::string& name) {
-  static const char* const trunk[] = {"pelvis", "jaw", "left_patella", "right_patella"};
-  for (const char* t : trunk)
-    if (name == t) return true;
-  TrunkJoint level{0, 0, 0};
-  return isStandardLimbJoint(name) || trunkLevel(name, false, level);
-}
 
 BvhJointMap defaultCmuJointMap(const BvhMotion& motion, const Skeleton& skeleton) {
   const std::map<std::string, std::string> cmu = cmuNames(motion);
@@ -158,13 +150,11 @@ BvhJointMap defaultCmuJointMap(const BvhMotion& motion, const Skeleton& skeleton
       map.joints[name->second] = joint;
   };
   follow("pelvis", "hips");
-  for (const char* side : {"left_", "right_"}) {
-    const std::string pre = side;
-    for (const auto& entry : kLimbRoles) {
-      const std::string limb = entry.first;
-      if (limb == "scapula" && skeleton.find(pre + "clavicle") >= 0) continue;  // the collar drives the clavicle
-      follow(pre + limb, pre + entry.second);
-    }
+  for (const StandardJoint& joint : standardJoints()) {
+    if (joint.region == JointRegion::Trunk) continue;
+    const std::string pre = sidePrefix(joint.name), limb = std::string(joint.name).substr(pre.size());
+    if (limb == "scapula" && skeleton.find(pre + "clavicle") >= 0) continue;  // the collar drives the clavicle
+    follow(joint.name, pre + cmuLimbRole(limb));
   }
   mapTrunk(skeleton, cmu, map);
   if (map.empty())
@@ -172,7 +162,7 @@ BvhJointMap defaultCmuJointMap(const BvhMotion& motion, const Skeleton& skeleton
         cmu.empty() ? "the clip has none of the CMU joint names the built-in map knows (Hips, LeftUpLeg or "
                       "LeftHip, ...): give a joint map (JSON {\"BVH joint\": \"skeleton joint\", ...})"
                     : "the built-in CMU joint map matches no joint of this skeleton (it knows pelvis, spine, "
-                      "vertebra_*, neck, head, left_/right_ hip, knee, ankle, shoulder, elbow, wrist, clavicle, "
+                      "chest, vertebra_*, neck, head, left_/right_ hip, knee, ankle, shoulder, elbow, wrist, clavicle, "
                       "scapula): give a joint map (JSON {\"BVH joint\": \"skeleton joint\", ...})");
   return map;
 }
@@ -234,10 +224,9 @@ JointMapCoverage jointMapCoverage(const Skeleton& skeleton, const BvhJointMap& m
       continue;
     }
     const std::string side = sidePrefix(joint.name);
-    const std::string limb = joint.name.substr(side.size());
     // One shoulder girdle joint per side in the clips: the other girdle bone follows the driven one.
-    const bool girdleFollows = isGirdle(limb) && (driven(side + "clavicle") || driven(side + "scapula"));
-    if (isStandardLimbJoint(joint.name) && !girdleFollows) {
+    const bool girdleFollows = isGirdleJoint(joint.name) && (driven(side + "clavicle") || driven(side + "scapula"));
+    if ((isLimbJoint(joint.name) || isGirdleJoint(joint.name)) && !girdleFollows) {
       coverage.undrivenLimbs.push_back(joint.name);
     } else if (isStandardJointName(joint.name)) {
       coverage.following.push_back(joint.name);

@@ -2,12 +2,10 @@
 // Which skeleton joint a BVH clip drives, and with which of the clip's joints: the built-in map of
 // the CMU clips onto the standard joint names, joint map files, and the report of what is driven.
 //
-// Standard joint names (what the automatic rig and the phantom call their joints):
-//   pelvis (root); spine (the lowest vertebra, or spine label, above the pelvis); chest (a thoracic
-//   spine labelled as one bone); vertebra_<level> (vertebra_L4, vertebra_T12, vertebra_C3, ...);
-//   neck (the lowest cervical joint, or the skull's joint when no head joint exists); head (the
-//   skull above a neck); LEFT/RIGHT_ clavicle, scapula, shoulder (humerus), elbow (forearm), wrist
-//   (hand), hip (femur), knee (tibia), ankle (foot).
+// The skeleton's joints by the standard names of anatomy_names.h (what the automatic rig and the
+// phantom call them): pelvis, spine, chest, vertebra_<level>, neck (C7 or a cervical spine label; the
+// skull's joint when no cervical bone is below it), head (the skull above a neck), jaw, and the
+// girdles and limbs left_/right_ clavicle, scapula, shoulder, elbow, wrist, hip, knee, ankle.
 #include <map>
 #include <string>
 #include <utility>
@@ -54,21 +52,17 @@ BvhJointMap defaultCmuJointMap(const BvhMotion& motion, const Skeleton& skeleton
 BvhJointMap parseJointMapJson(const std::string& text);
 BvhJointMap readJointMapFile(const std::string& path);
 
-/// True for left_/right_ hip, knee, ankle, shoulder, elbow, wrist, clavicle, scapula.
-bool isStandardLimbJoint(const std::string& name);
-/// True for every standard name: the limb joints, pelvis, spine, chest, neck, head, jaw,
-/// vertebra_C1 ... vertebra_L5, left_/right_patella.
-bool isStandardJointName(const std::string& name);
-
 /// What a map drives, for the user.
 struct JointMapCoverage {
   /// Skeleton joints the map drives (skeleton order) and their BVH sources ("LeftLeg",
   /// "lowerback 40% + Chest").
   std::vector<std::pair<std::string, std::string>> driven;
-  /// Standard limb joints the map does not drive (they only follow their parents). A clavicle or
-  /// scapula next to a driven one of the same side is not listed: clips have one shoulder girdle joint.
+  /// Standard limb and girdle joints the map does not drive (they only follow their parents). A
+  /// clavicle or scapula next to a driven one of the same side is not listed: clips have one shoulder
+  /// girdle joint.
   std::vector<std::string> undrivenLimbs;
-  /// Other standard joints the map does not drive: they follow their parents (jaw, patella, ...).
+  /// Other standard joints the map does not drive: they follow their parents (jaw, a scapula beside a
+  /// driven clavicle, ...).
   std::vector<std::string> following;
   /// Joints whose names are not standard: no built-in map can drive them (they follow their parents).
   std::vector<std::string> unknownNames;
