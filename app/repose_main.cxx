@@ -222,22 +222,39 @@ const char* kPoseUsage =
     "                          |det F - 1| for each of lbs, dqs, lbs+fem, dqs+fem\n";
 
 const char* kAnimateUsage =
-    "usage: repose animate --case CASE_DIR --bvh FILE --out DIR [--map FILE] [--frames START:STOP:STEP]\n"
+    "usage: repose animate --case CASE_DIR --bvh FILE --out DIR [--map FILE] [--strict] [--frames START:STOP:STEP]\n"
     "                      [--skinning dqs|lbs] [--volumes] [--image FILE] [--mode direction|relative]\n"
-    "                      [--reference-frame N] [--mesh FILE ...]\n"
-    "                      [--no-root-motion] [--unit-mm MM]\n"
+    "                      [--reference-frame N] [--mesh FILE ...] [--no-root-motion] [--unit-mm MM]\n"
+    "                      [--max-voxels N]\n"
     "  Retargets every selected frame of the clip onto the case's skeleton and writes the posed mesh and\n"
     "  surfaces per frame (DIR/frames/), DIR/animation.pvd (open it in ParaView) and DIR/frames.csv (per\n"
     "  frame: body volume ratio, posing time, with --volumes each label's voxel-count ratio, and with --relax\n"
     "  the FEM's time, Newton and CG iterations, inverted tets, continuation steps, the strained region's\n"
     "  nodes and Newton iterations, and the nodes pinched between bones).\n"
-    "  --map FILE        JSON {BVH joint: skeleton joint}; default: CMU names onto the standard joint names\n"
+    "  First it prints the clip's units and which skeleton joints the clip drives, and warns about\n"
+    "  recognised limb joints (left_knee, right_elbow, ...) that it does not drive and about joint names\n"
+    "  the built-in map does not know: those only follow their parents. A clip that drives no joint of the\n"
+    "  skeleton but its root is an error.\n"
+    "  --map FILE        JSON {BVH joint: skeleton joint}. Default: the CMU clips (both conversions, LeftHip or\n"
+    "                    LeftUpLeg names) onto the standard joint names: pelvis, spine, chest, vertebra_L4 ...,\n"
+    "                    neck, head, left_/right_ hip, knee, ankle, shoulder, elbow, wrist, clavicle, scapula; the\n"
+    "                    vertebrae share the clip's spine and neck rotations by spinal level\n"
+    "  --strict          a recognised limb joint that the clip does not drive, or (without --map) a joint name\n"
+    "                    the built-in map does not know, is an error, not a warning\n"
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
     "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*)\n"
-    "  --mode            direction (default): each bone points where the BVH bone points; relative:\n"
-    "                    each joint's rotation relative to --reference-frame (default 0)\n"
-    "  --unit-mm MM      millimetres per BVH unit (default 56.44, CMU)\n"
+    "  --mode            direction (default): each limb bone points where the BVH bone points, the trunk and\n"
+    "                    head bend as the clip's bend from its rest pose; relative: each joint's rotation\n"
+    "                    relative to --reference-frame (default 0), taken to be the scan's rest pose\n"
+    "  --no-root-motion  keep the pelvis where it is in the scan: the body moves its joints but does not travel\n"
+    "                    (a walk on the spot). Default: the body travels by the clip's root displacement from\n"
+    "                    the reference frame, converted by the clip's units\n"
+    "  --unit-mm MM      millimetres per BVH unit. Default: inferred from the clip's leg length against an\n"
+    "                    adult's (CMU clips 56.44, centimetres 10, inches 25.4, metres 1000) and printed\n"
+    "  --max-voxels N    largest posed volume of a frame (default 512M; k, M, G suffixes): a larger one stops\n"
+    "                    with an error. Volumes stay on the rest grid's lattice; a body that travelled away\n"
+    "                    gets a grid cropped to it\n"
     "  --relax           corotational FEM relaxation of every frame (see repose pose --help)\n"
     "  --relax-start S   previous (default): each frame's FEM starts from the frame before's correction\n"
     "                    (fewer Newton steps, coherent frames); skinned: every frame from its skinned pose alone\n"
@@ -768,6 +785,79 @@ std::map<int, long> labelCounts(vtkImageData* labels) {
   return counts;
 }
 
+/// "512M", "2G", "300k", "1e9" -> a voxel count (k, M, G: thousands, millions, billions).
+double parseVoxelCount(const std::string& text) {
+  char* end = nullptr;
+  double v = std::strtod(text.c_str(), &end);
+  const std::string suffix = end ? std::string(end) : std::string();
+  if (suffix == "k" || suffix == "K") v *= 1e3;
+  else if (suffix == "M") v *= 1e6;
+  else if (suffix == "G") v *= 1e9;
+  else if (!suffix.empty()) v = -1;
+  if (text.empty() || !std::isfinite(v) || v < 1)
+    throw UsageError("--max-voxels needs a voxel count such as 512M, 2G or 300000000, not '" + text + "'");
+  return v;
+}
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+/// The clip retargeted onto the skeleton; says the clip's units and which joints it drives, and warns
+/// (or with --strict fails) when recognised limb joints are left undriven.
+std::unique_ptr<repose::BvhRetargeter> retargetClip(const Options& o, const repose::Skeleton& skeleton,
+                                                    const repose::BvhMotion& motion, const std::string& bvhPath) {
+  repose::BvhJointMap map;
+  repose::JointMapCoverage coverage;
+  try {
+    map = o.has("map") ? repose::readJointMapFile(o.get("map")) : repose::defaultCmuJointMap(motion, skeleton);
+    coverage = repose::jointMapCoverage(skeleton, map);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error((o.has("map") ? o.get("map") + ": " : bvhPath + ": ") + e.what());
+  }
+  repose::RetargetOptions options;
+  options.mode = repose::parseRetargetMode(o.get("mode", "direction"));
+  options.referenceFrame = static_cast<int>(o.number("reference-frame", 0));
+  options.translateRoot = !o.has("no-root-motion");
+  options.unitScaleMm = o.number("unit-mm", 0);
+  std::unique_ptr<repose::BvhRetargeter> retargeter;
+  try {
+    retargeter = std::make_unique<repose::BvhRetargeter>(motion, skeleton, map, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(bvhPath + ": " + e.what());
+  }
+  const repose::BvhUnits& units = retargeter->units();
+  char line[256];
+  if (o.has("unit-mm"))
+    std::snprintf(line, sizeof(line), "%g mm per unit (--unit-mm)", units.mmPerUnit);
+  else
+    std::snprintf(line, sizeof(line), "%s (%s %.1f units), %.*f mm per unit; --unit-mm overrides", units.name.c_str(),
+                  units.measure.c_str(), units.measuredUnits, units.mmPerUnit < 100 ? 2 : 0, units.mmPerUnit);
+  std::cout << "animate: BVH units: " << line << "\n";
+  std::string driven;
+  for (const auto& [joint, source] : coverage.driven) driven += (driven.empty() ? "" : ", ") + joint + " <- " + source;
+  std::cout << "animate: the clip drives " << coverage.driven.size() << " of " << skeleton.size()
+            << " joints: " << driven << "\n";
+  if (!coverage.following.empty())
+    std::cout << "animate: not driven, following their parents: " << joinNames(coverage.following) << "\n";
+  std::vector<std::string> problems;
+  if (!coverage.undrivenLimbs.empty())
+    problems.push_back("the clip drives none of the limb joints " + joinNames(coverage.undrivenLimbs));
+  if (!coverage.unknownNames.empty() && !o.has("map"))
+    problems.push_back("the built-in map does not know the joint names " + joinNames(coverage.unknownNames) +
+                       " (standard names: see --help)");
+  for (const std::string& problem : problems) {
+    if (o.has("strict"))
+      throw std::runtime_error(bvhPath + ": " + problem + " (--strict): map them with --map FILE, JSON " +
+                               "{\"BVH joint\": \"skeleton joint\"}");
+    std::cout << "animate: warning: " << problem << ": they only follow their parents; map them with --map FILE "
+              << "(JSON {\"BVH joint\": \"skeleton joint\"}), or --strict to stop here\n";
+  }
+  return retargeter;
+}
+
 int runAnimate(const Options& o, int argc, char** argv) {
   if (o.help) return std::cout << kAnimateUsage, 0;
   if (o.has("compare")) requireDisplay(argc, argv, "fidelity.png");
@@ -778,8 +868,11 @@ int runAnimate(const Options& o, int argc, char** argv) {
   if (relaxStart != "previous" && relaxStart != "skinned") throw UsageError("--relax-start must be previous or skinned");
   if (o.has("relax-start") && !o.has("relax") && !o.has("compare"))
     throw UsageError("--relax-start needs --relax (or --compare with a +fem method)");
+  const double maxVoxels = parseVoxelCount(o.get("max-voxels", "512M"));
+  if (o.has("unit-mm") && !(o.number("unit-mm", 0) > 0)) throw UsageError("--unit-mm needs a positive number of millimetres");
   repose::Pipeline pipeline;
   pipeline.loadCase(caseDir);
+  pipeline.setMaxPosedVoxels(maxVoxels);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
   pipeline.setRelaxationWarmStart(relaxStart == "previous");
   applyRelaxation(pipeline, o);
@@ -791,23 +884,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }
-  repose::BvhJointMap map;
-  try {
-    map = o.has("map") ? repose::readJointMapFile(o.get("map")) : repose::defaultCmuJointMap(motion, skeleton);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error((o.has("map") ? o.get("map") + ": " : bvhPath + ": ") + e.what());
-  }
-  repose::RetargetOptions options;
-  options.mode = repose::parseRetargetMode(o.get("mode", "direction"));
-  options.referenceFrame = static_cast<int>(o.number("reference-frame", 0));
-  options.translateRoot = !o.has("no-root-motion");
-  options.unitScaleMm = o.number("unit-mm", options.unitScaleMm);
-  std::unique_ptr<repose::BvhRetargeter> retargeter;
-  try {
-    retargeter = std::make_unique<repose::BvhRetargeter>(motion, skeleton, map, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(bvhPath + ": " + e.what());
-  }
+  const std::unique_ptr<repose::BvhRetargeter> retargeter = retargetClip(o, skeleton, motion, bvhPath);
   const FrameRange range = parseFrames(o.get("frames"), motion.frameCount);
   const bool volumes = o.has("volumes");
   FidelityReport fidelity;
@@ -834,7 +911,8 @@ int runAnimate(const Options& o, int argc, char** argv) {
            "strained_region_nodes,strained_region_newton_iterations,pinched_nodes";
   csv << "\n";
   int written = 0;
-  double totalPosing = 0, worstPosing = 0;
+  double totalPosing = 0, worstPosing = 0, largestVolume = 0;
+  int largestDims[3] = {0, 0, 0};
   for (int f = range.start; f < range.stop; f += range.step) {
     char name[64];
     pipeline.setPose(retargeter->pose(f));
@@ -845,8 +923,23 @@ int runAnimate(const Options& o, int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     vtkUnstructuredGrid* mesh = pipeline.posedMesh();
     vtkPolyData* surfaces = pipeline.posedSurfaces();
-    vtkImageData* labels = volumes ? pipeline.posedLabels() : nullptr;
-    vtkImageData* image = pipeline.posedImage();
+    vtkImageData* labels = nullptr;
+    vtkImageData* image = nullptr;
+    try {
+      labels = volumes ? pipeline.posedLabels() : nullptr;
+      image = pipeline.posedImage();
+    } catch (const std::runtime_error& e) {
+      const bool tooLarge = std::string(e.what()).find("posed volume would have") != std::string::npos;
+      throw std::runtime_error(bvhPath + ": frame " + std::to_string(f) + ": " + e.what() +
+                               (tooLarge ? "; keep the root in place (--no-root-motion), check the clip's units "
+                                           "(--unit-mm) or raise --max-voxels"
+                                         : ""));
+    }
+    for (vtkImageData* volume : {labels, image})
+      if (volume && double(volume->GetNumberOfPoints()) > largestVolume) {
+        largestVolume = double(volume->GetNumberOfPoints());
+        volume->GetDimensions(largestDims);
+      }
     const double posing = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     totalPosing += posing;
     worstPosing = std::max(worstPosing, posing);
@@ -896,6 +989,9 @@ int runAnimate(const Options& o, int argc, char** argv) {
   std::cout << "animate: " << written << " frames of " << bvhPath << " written to " << outDir << " (posing "
             << std::fixed << std::setprecision(1) << 1e3 * totalPosing / std::max(written, 1) << " ms mean, "
             << 1e3 * worstPosing << " ms worst per frame" << (volumes ? ", with the label volume" : "") << ")\n";
+  if (largestVolume > 0)
+    std::cout << "animate: largest posed volume " << largestDims[0] << " x " << largestDims[1] << " x " << largestDims[2]
+              << " = " << std::setprecision(3) << largestVolume / 1e6 << " M voxels\n";
   return 0;
 }
 
@@ -1020,9 +1116,9 @@ int main(int argc, char** argv) {
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
-                                 "unit-mm", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation",
+                                 "unit-mm", "max-voxels", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation",
                                  "relax-strained-region", "poisson", "relax-start", "compare", "mesh"},
-                                {"volumes", "no-root-motion", "relax"}),
+                                {"volumes", "no-root-motion", "relax", "strict"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");
   } catch (const UsageError& e) {

@@ -444,6 +444,7 @@ void Pipeline::connectPosing() {
   labelResampler_->SetInputConnection(2, skinning_->GetOutputPort());
   labelResampler_->SetInterpolationToNearest();
   labelResampler_->SetBackgroundValue(0);
+  if (maxPosedVoxels_ >= 0) labelResampler_->SetMaxVoxels(maxPosedVoxels_);
   imageResampler_ = nullptr;
   relax_ = relaxBySkinning_[0] = relaxBySkinning_[1] = nullptr;
 }
@@ -541,6 +542,13 @@ void Pipeline::setRestImage(vtkImageData* image, const std::string& imageName) {
   double range[2];
   image->GetPointData()->GetScalars()->GetRange(range);
   imageResampler_->SetBackgroundValue(range[0]);
+  if (maxPosedVoxels_ >= 0) imageResampler_->SetMaxVoxels(maxPosedVoxels_);
+}
+
+void Pipeline::setMaxPosedVoxels(double voxels) {
+  maxPosedVoxels_ = voxels;
+  for (vtkReposePosedVolume* resampler : {labelResampler_.Get(), imageResampler_.Get()})
+    if (resampler) resampler->SetMaxVoxels(voxels);
 }
 
 /// Runs a posing filter and records its time, only when it actually executed (the pipeline

@@ -135,6 +135,9 @@ public:
   vtkPolyData* posedSurfaces();
   vtkImageData* posedLabels();
   vtkImageData* posedImage();   ///< null without a rest image
+  /// Largest posed volume in voxels: a larger one makes posedLabels()/posedImage() throw with its size
+  /// and the posed body's span (default: vtkReposePosedVolume's, 512 M; 0 = no limit).
+  void setMaxPosedVoxels(double voxels);
 
   /// Signed volume of the rest and of the posed tet mesh (mm^3).
   double restMeshVolume();
@@ -180,6 +183,7 @@ private:
   vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
   vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;
+  double maxPosedVoxels_ = -1;  // < 0: the resamplers' default
   std::vector<StageTime> timings_;
   Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> tets_;  // rest mesh connectivity, for volumes
   std::vector<std::int32_t> tetLabels_;

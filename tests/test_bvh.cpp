@@ -219,4 +219,89 @@ TEST(Bvh, MissingFileNamesThePath) {
   }
 }
 
+// Units from the proportions: both CMU conversions, the same clips in other units, a clip with no
+// knee (rest pose height), and a clip without length.
+TEST(Bvh, InfersUnitsFromLegLength) {
+  const double cmu = 25.4 / 0.45;
+  for (const char* file : {"cmu_131_01_walk.bvh", "cmu_short_75frames.bvh"}) {
+    const repose::BvhMotion m = repose::readBvhFile(kMocap + file);
+    const repose::BvhUnits u = repose::inferBvhUnits(m);
+    std::printf("%s: %s, leg length %.2f units = %.0f mm\n", file, u.name.c_str(), u.measuredUnits,
+                u.measuredUnits * u.mmPerUnit);
+    EXPECT_EQ(u.measure, "leg length") << file;
+    EXPECT_DOUBLE_EQ(u.mmPerUnit, cmu) << file;
+    EXPECT_GT(u.measuredUnits * u.mmPerUnit, 700) << file;  // hip to ankle of an adult
+    EXPECT_LT(u.measuredUnits * u.mmPerUnit, 900) << file;
+    // The same clip in other units: each is recognised, and the leg keeps its length in mm.
+    const struct {
+      double mmPerUnit;
+      const char* name;
+    } others[] = {{10, "centimetres"}, {1000, "metres"}, {25.4, "inches"}, {1, "millimetres"}, {304.8, "feet"}};
+    for (const auto& other : others) {
+      repose::BvhMotion scaled = m;
+      repose::scaleBvhLengths(scaled, cmu / other.mmPerUnit);
+      const repose::BvhUnits v = repose::inferBvhUnits(scaled);
+      EXPECT_EQ(v.name, other.name) << file;
+      EXPECT_DOUBLE_EQ(v.mmPerUnit, other.mmPerUnit) << file;
+      EXPECT_NEAR(v.measuredUnits * v.mmPerUnit, u.measuredUnits * u.mmPerUnit, 1e-9 * cmu * u.measuredUnits) << file;
+      // Root positions scale with the offsets.
+      EXPECT_NEAR(scaled.frames(3, 1) * v.mmPerUnit, m.frames(3, 1) * cmu, 1e-9) << file;
+    }
+  }
+  // No joint named like a knee: the rest pose's height (178 units of centimetres).
+  const std::string noKnee = R"(HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT Chest
+  {
+    OFFSET 0 45 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT Head
+    {
+      OFFSET 0 25 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 0 15 0
+      }
+    }
+  }
+  JOINT LThigh
+  {
+    OFFSET 9 -5 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT LFoot
+    {
+      OFFSET 0 -80 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 0 -8 12
+      }
+    }
+  }
+}
+MOTION
+Frames: 1
+Frame Time: 0.01
+0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0
+)";
+  const repose::BvhUnits h = repose::inferBvhUnits(repose::parseBvh(noKnee, "noknee.bvh"));
+  EXPECT_EQ(h.measure, "rest pose height");
+  EXPECT_DOUBLE_EQ(h.measuredUnits, 178);
+  EXPECT_EQ(h.name, "centimetres");
+  // The knee of smallBvh() is found by its name: 10 + 5 units of leg, CMU-sized.
+  const repose::BvhUnits k = repose::inferBvhUnits(repose::parseBvh(smallBvh(), "test.bvh"));
+  EXPECT_EQ(k.measure, "leg length");
+  EXPECT_DOUBLE_EQ(k.measuredUnits, 15);
+  // A skeleton without length has no unit.
+  repose::BvhMotion flat = repose::parseBvh(smallBvh(), "test.bvh");
+  flat.joints[1].offset.setZero();
+  flat.joints[1].endSite.setZero();
+  EXPECT_THROW(repose::inferBvhUnits(flat), std::invalid_argument);
+  EXPECT_THROW(repose::scaleBvhLengths(flat, 0), std::invalid_argument);
+}
+
 }  // namespace

@@ -632,3 +632,62 @@ TEST(ResamplePull, SubExtentEqualsThatPartOfTheFullResample) {
     EXPECT_THROW(repose::resampleLabelsPull(L, V, P, T, out, sub, -3), std::invalid_argument);
   }
 }
+
+// The posed grid: on the rest lattice; holding the rest extent while the body stays near it, the
+// body alone (with its own margin) once it has travelled away; a voxel limit with a readable error.
+TEST(PosedOutputGrid, BoundedToTheBodyOnTheRestLattice) {
+  const ImageGrid g = testGrid();
+  Points V;
+  Tets T;
+  peeledMesh(g, V, T);
+  auto onLattice = [&](const ImageGrid& out) {
+    const Eigen::Vector3d first = g.physicalToIndex(out.origin);
+    return (first - first.array().round().matrix()).norm() < 1e-9 && out.spacing == g.spacing &&
+           out.direction == g.direction;
+  };
+  // In place: the rest extent plus the padding.
+  const ImageGrid inPlace = repose::posedOutputGrid(g, V, 2);
+  EXPECT_TRUE(onLattice(inPlace));
+  EXPECT_EQ(inPlace.dims, (std::array<int, 3>{g.dims[0] + 4, g.dims[1] + 4, g.dims[2] + 4}));
+  // Moved far (a walk): the body's box, with bodyPaddingVoxels, not the rest extent and the walk.
+  Points far = V;
+  far.col(1).array() += 5000.0;  // along i (the direction swaps i and j)
+  repose::PosedGridOptions options;
+  options.paddingVoxels = 2;
+  options.bodyPaddingVoxels = 5;
+  const ImageGrid walked = repose::posedOutputGrid(g, far, options);
+  EXPECT_TRUE(onLattice(walked));
+  EXPECT_EQ(walked.dims, (std::array<int, 3>{g.dims[0] - 2 + 10, g.dims[1] - 2 + 10, g.dims[2] - 2 + 10}));
+  EXPECT_LT(walked.voxelCount(), 2 * inPlace.voxelCount());
+  // Its voxel centres hold the moved body exactly where the rest voxels' centres moved to.
+  const Eigen::Vector3d shifted = walked.physicalToIndex(g.indexToPhysical(Eigen::Vector3d(1, 1, 1)) +
+                                                         Eigen::Vector3d(0, 5000, 0));
+  EXPECT_LT((shifted - Eigen::Vector3d(5, 5, 5)).norm(), 1e-9);
+  // A small move keeps the rest extent (same voxel indices for unmoved anatomy) ...
+  Points near = V;
+  near.col(1).array() += 4.0;
+  const ImageGrid nudged = repose::posedOutputGrid(g, near, options);
+  EXPECT_EQ(nudged.origin, inPlace.origin);
+  // ... unless restExtentFactor 0 asks for the body alone.
+  options.restExtentFactor = 0;
+  EXPECT_EQ(repose::posedOutputGrid(g, V, options).dims,
+            (std::array<int, 3>{g.dims[0] - 2 + 10, g.dims[1] - 2 + 10, g.dims[2] - 2 + 10}));
+  // The limit: a one-line error with the size and the body's span.
+  options.maxVoxels = 1000;
+  try {
+    repose::posedOutputGrid(g, far, options);
+    ADD_FAILURE() << "expected the voxel limit to be enforced";
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("would have 38760 voxels (38 x 34 x 30 of 0.8 mm), more than the limit of 1000 voxels"),
+              std::string::npos)
+        << message;
+    EXPECT_NE(message.find("the posed body spans 27 x 29 x 15 mm"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos);
+  }
+  options.maxVoxels = double(walked.voxelCount());
+  options.restExtentFactor = 2;
+  EXPECT_NO_THROW(repose::posedOutputGrid(g, far, options));
+  EXPECT_EQ(repose::extrapolationReachVoxels(g, -1), 4 + 2);  // 2 x 1.25 mm over 0.8 mm, + 2
+  EXPECT_EQ(repose::extrapolationReachVoxels(g, 0), 0);
+}

@@ -5,12 +5,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "bvh.h"
+#include "bvh_joint_map.h"
 #include "pose.h"
 #include "retarget.h"
 #include "skeleton.h"
@@ -20,8 +22,8 @@ namespace {
 const std::string kMocap = std::string(REPOSE_SHARED_DATA) + "/mocap/";
 constexpr double kDeg = M_PI / 180;
 
-// A T-pose BVH in CMU MotionBuilder names: legs straight down, arms horizontal. The "Spine" joint
-// between LowerBack and Head is left out of the default map on purpose. Columns (rotations in the
+// A T-pose BVH in CMU MotionBuilder names: legs straight down, arms horizontal. The trunk is
+// LowerBack, Spine and Head (no Spine1, Neck, Neck1). Columns (rotations in the
 // order listed): Hips 0-5 (pos XYZ, rot Y X Z), LeftUpLeg 6-8 (Z X Y), LeftLeg 9-11 (X Y Z),
 // LeftFoot 12-14 (Z Y X), RightUpLeg 15-17, RightLeg 18-20, RightFoot 21-23 (Z X Y),
 // LowerBack 24-26, Spine 27-29, Head 30-32, LeftArm 33-35, LeftForeArm 36-38, LeftHand 39-41,
@@ -190,13 +192,27 @@ Eigen::Vector3d bvhBone(const repose::BvhMotion& m, const std::vector<Eigen::Iso
 struct Bone {
   const char *scanA, *scanB, *bvhA, *bvhB;
 };
-const Bone kBones[] = {
+const Bone kLimbBones[] = {
     {"left_hip", "left_knee", "LeftUpLeg", "LeftLeg"},       {"left_knee", "left_ankle", "LeftLeg", "LeftFoot"},
     {"right_hip", "right_knee", "RightUpLeg", "RightLeg"},   {"right_knee", "right_ankle", "RightLeg", "RightFoot"},
-    {"spine", "neck", "LowerBack", "Head"},                   {"left_shoulder", "left_elbow", "LeftArm", "LeftForeArm"},
+    {"left_shoulder", "left_elbow", "LeftArm", "LeftForeArm"},
     {"left_elbow", "left_wrist", "LeftForeArm", "LeftHand"}, {"right_shoulder", "right_elbow", "RightArm", "RightForeArm"},
     {"right_elbow", "right_wrist", "RightForeArm", "RightHand"},
 };
+
+// A map of BVH joints that skeleton joints follow.
+repose::BvhJointMap follow(std::initializer_list<std::pair<const std::string, std::string>> joints) {
+  repose::BvhJointMap map;
+  map.joints = joints;
+  return map;
+}
+
+// Global rotation of a BVH joint in LPS.
+Eigen::Matrix3d bvhRotation(const repose::BvhMotion& m, const std::vector<Eigen::Isometry3d>& g, const std::string& joint) {
+  return repose::bvhToLps() * g[m.find(joint)].linear() * repose::bvhToLps().transpose();
+}
+
+double angleOf(const Eigen::Matrix3d& r) { return Eigen::AngleAxisd(r).angle() / kDeg; }
 
 std::vector<double> zeroRow() { return std::vector<double>(kColumns, 0.0); }
 
@@ -232,30 +248,36 @@ repose::BvhMotion knownMotion() {
 TEST(Retarget, DefaultMapResolvesBothCmuConversions) {
   const repose::Skeleton s = scanSkeleton();
   const repose::BvhJointMap walk = repose::defaultCmuJointMap(repose::readBvhFile(kMocap + "cmu_131_01_walk.bvh"), s);
-  EXPECT_EQ(walk.size(), 15u);
-  EXPECT_EQ(walk.at("LeftShoulder"), "left_shoulder");  // 3dsMax: LeftShoulder rotates the upper arm
-  EXPECT_EQ(walk.at("LeftHip"), "left_hip");
-  EXPECT_EQ(walk.at("lowerback"), "spine");
-  EXPECT_EQ(walk.at("RightWrist"), "right_wrist");
+  EXPECT_EQ(walk.joints.size(), 13u);  // pelvis and 12 limb joints
+  EXPECT_EQ(walk.joints.at("LeftShoulder"), "left_shoulder");  // 3dsMax: LeftShoulder rotates the upper arm
+  EXPECT_EQ(walk.joints.at("LeftHip"), "left_hip");
+  EXPECT_EQ(walk.joints.at("RightWrist"), "right_wrist");
+  // A whole-spine bone below the skull's joint takes the five CMU spine and neck joints, the skull the head.
+  ASSERT_EQ(walk.shares.at("spine").size(), 5u);
+  EXPECT_EQ(walk.shares.at("spine")[0].bvhJoint, "lowerback");
+  EXPECT_EQ(walk.shares.at("spine")[4].bvhJoint, "Neck");  // 3dsMax: Neck is the upper neck
+  ASSERT_EQ(walk.shares.at("neck").size(), 1u);
+  EXPECT_EQ(walk.shares.at("neck")[0].bvhJoint, "Head");
   const repose::BvhJointMap mb = repose::defaultCmuJointMap(repose::readBvhFile(kMocap + "cmu_short_75frames.bvh"), s);
-  EXPECT_EQ(mb.size(), 15u);
-  EXPECT_EQ(mb.at("LeftArm"), "left_shoulder");  // MotionBuilder: LeftShoulder is the collar
-  EXPECT_EQ(mb.count("LeftShoulder"), 0u);
-  EXPECT_EQ(mb.at("LeftUpLeg"), "left_hip");
-  EXPECT_EQ(mb.at("LowerBack"), "spine");
-  EXPECT_EQ(mb.at("Head"), "neck");
+  EXPECT_EQ(mb.joints.size(), 13u);
+  EXPECT_EQ(mb.joints.at("LeftArm"), "left_shoulder");  // MotionBuilder: LeftShoulder is the collar
+  EXPECT_EQ(mb.joints.count("LeftShoulder"), 0u);
+  EXPECT_EQ(mb.joints.at("LeftUpLeg"), "left_hip");
+  EXPECT_EQ(mb.shares.at("spine")[0].bvhJoint, "LowerBack");
+  EXPECT_EQ(mb.shares.at("spine")[3].bvhJoint, "Neck");  // MotionBuilder: Neck is the lower neck
+  EXPECT_EQ(mb.shares.at("neck")[0].bvhJoint, "Head");
 }
 
 TEST(Retarget, DirectionModeReproducesBvhBoneDirections) {
   const repose::BvhMotion m = knownMotion();
   const repose::Skeleton s = scanSkeleton();
   const repose::BvhRetargeter retarget(m, s, repose::defaultCmuJointMap(m, s));
-  EXPECT_EQ(retarget.mainChild()[s.find("spine")], s.find("neck"));
+  EXPECT_EQ(retarget.mainChild()[s.find("left_hip")], s.find("left_knee"));
   for (int f = 0; f < m.frameCount; ++f) {
     const repose::Pose pose = retarget.pose(f);
     const auto g = repose::forwardKinematics(s, pose);
     const auto b = repose::bvhGlobalPose(m, f);
-    for (const Bone& bone : kBones)
+    for (const Bone& bone : kLimbBones)
       EXPECT_LT((scanBone(s, g, bone.scanA, bone.scanB) - bvhBone(m, b, bone.bvhA, bone.bvhB)).norm(), 1e-6)
           << "frame " << f << " bone " << bone.scanA << "->" << bone.scanB;
     // The pelvis's left-right axis (between the hip centres) follows the BVH's.
@@ -263,6 +285,10 @@ TEST(Retarget, DirectionModeReproducesBvhBoneDirections) {
     const Eigen::Vector3d lateral =
         (g[pelvis].linear() * (s.joints[s.find("left_hip")].center - s.joints[s.find("right_hip")].center)).normalized();
     EXPECT_LT((lateral - bvhBone(m, b, "RightUpLeg", "LeftUpLeg")).norm(), 1e-6) << "frame " << f;
+    // The trunk turns as the clip's does from its rest pose (both rest poses have the hips on the x
+    // axis, so the body's alignment is the identity): the whole-spine bone as Spine, the skull as Head.
+    EXPECT_LT((g[s.find("spine")].linear() - bvhRotation(m, b, "Spine")).norm(), 1e-9) << "frame " << f;
+    EXPECT_LT((g[s.find("neck")].linear() - bvhRotation(m, b, "Head")).norm(), 1e-9) << "frame " << f;
     // Rigid transforms only.
     for (const auto& t : g) EXPECT_LT((t.linear().transpose() * t.linear() - Eigen::Matrix3d::Identity()).norm(), 1e-9);
   }
@@ -276,12 +302,14 @@ TEST(Retarget, DirectionModeReproducesBvhBoneDirections) {
   EXPECT_LT((scanBone(s, g, "left_elbow", "left_wrist") - Eigen::Vector3d(0, -c30, -s30)).norm(), 1e-9);  // forearm fwd
   EXPECT_LT((scanBone(s, g, "right_hip", "right_knee") - Eigen::Vector3d(0, 0, -1)).norm(), 1e-9);
   EXPECT_LT((scanBone(s, g, "right_shoulder", "right_elbow") - Eigen::Vector3d(-1, 0, 0)).norm(), 1e-9);  // T-pose
-  // Leaf (ankle): keeps the knee's rotation composed with the BVH ankle's 20 degrees.
+  // Limb end (ankle): keeps the knee's rotation composed with the BVH ankle's 20 degrees.
   const repose::Pose p1 = retarget.pose(1);
   EXPECT_NEAR(Eigen::AngleAxisd(p1.rotations.at("left_ankle")).angle(), 20 * kDeg, 1e-9);
   EXPECT_NEAR(Eigen::AngleAxisd(p1.rotations.at("right_ankle")).angle(), 0, 1e-9);
-  // Root translation: CMU units to mm, BVH (1,2,3) -> LPS (1,-3,2), relative to frame 0.
-  EXPECT_LT((p1.translation - 56.44 * Eigen::Vector3d(1, -3, 2)).norm(), 1e-9);
+  // Root translation: inferred CMU units (legs of 14 units) to mm, BVH (1,2,3) -> LPS (1,-3,2),
+  // relative to frame 0.
+  EXPECT_EQ(retarget.units().name, "CMU units of 1/0.45 inch");
+  EXPECT_LT((p1.translation - 25.4 / 0.45 * Eigen::Vector3d(1, -3, 2)).norm(), 1e-9);
 }
 
 TEST(Retarget, DirectionModeTransfersTwist) {
@@ -314,36 +342,48 @@ TEST(Retarget, RelativeMode) {
     for (const auto& r : pose.rotations) EXPECT_LT(Eigen::AngleAxisd(r.second).angle(), 1e-9) << r.first;
     EXPECT_LT(pose.translation.norm(), 1e-9);
   }
-  // Reference = rest frame 0: every mapped scan bone turns by the BVH joint's global rotation.
+  // Reference = rest frame 0: every driven scan bone turns by its BVH joint's global rotation (the
+  // whole-spine bone by Spine's, whose rotation includes LowerBack's; the skull by Head's).
   repose::RetargetOptions options;
   options.mode = repose::RetargetMode::Relative;
   const repose::BvhRetargeter retarget(m, s, map, options);
   for (int f = 1; f < m.frameCount; ++f) {
     const auto g = repose::forwardKinematics(s, retarget.pose(f));
     const auto b = repose::bvhGlobalPose(m, f);
-    for (const Bone& bone : kBones) {
-      const int ia = s.find(bone.scanA);
-      const Eigen::Matrix3d expected = repose::bvhToLps() * b[m.find(bone.bvhA)].linear() * repose::bvhToLps().transpose();
-      EXPECT_LT((g[ia].linear() - expected).norm(), 1e-9) << "frame " << f << " " << bone.scanA;
-    }
+    for (const Bone& bone : kLimbBones)
+      EXPECT_LT((g[s.find(bone.scanA)].linear() - bvhRotation(m, b, bone.bvhA)).norm(), 1e-9)
+          << "frame " << f << " " << bone.scanA;
+    EXPECT_LT((g[s.find("spine")].linear() - bvhRotation(m, b, "Spine")).norm(), 1e-9) << "frame " << f;
+    EXPECT_LT((g[s.find("neck")].linear() - bvhRotation(m, b, "Head")).norm(), 1e-9) << "frame " << f;
   }
 }
 
 TEST(Retarget, RejectsBadMapsAndOptions) {
   const repose::BvhMotion m = knownMotion();
   const repose::Skeleton s = scanSkeleton();
-  EXPECT_THROW(repose::BvhRetargeter(m, s, {{"NoSuchJoint", "left_hip"}}), std::invalid_argument);
-  EXPECT_THROW(repose::BvhRetargeter(m, s, {{"LeftUpLeg", "no_such_joint"}}), std::invalid_argument);
-  EXPECT_THROW(repose::BvhRetargeter(m, s, {{"LeftUpLeg", "left_hip"}, {"LeftLeg", "left_hip"}}), std::invalid_argument);
-  EXPECT_THROW(repose::BvhRetargeter(m, s, {}), std::invalid_argument);
+  EXPECT_THROW(repose::BvhRetargeter(m, s, follow({{"NoSuchJoint", "left_hip"}})), std::invalid_argument);
+  EXPECT_THROW(repose::BvhRetargeter(m, s, follow({{"LeftUpLeg", "no_such_joint"}})), std::invalid_argument);
+  EXPECT_THROW(repose::BvhRetargeter(m, s, follow({{"LeftUpLeg", "left_hip"}, {"LeftLeg", "left_hip"}})),
+               std::invalid_argument);
+  EXPECT_THROW(repose::BvhRetargeter(m, s, repose::BvhJointMap()), std::invalid_argument);
+  // A map that drives the root alone would give rest-pose frames.
+  EXPECT_THROW(repose::BvhRetargeter(m, s, follow({{"Hips", "pelvis"}})), std::invalid_argument);
+  repose::BvhJointMap shares;
+  shares.shares["spine"] = {{"NoSuchJoint", 0.5}};
+  EXPECT_THROW(repose::BvhRetargeter(m, s, shares), std::invalid_argument);
+  shares.shares["spine"] = {{"Spine", -1}};
+  EXPECT_THROW(repose::BvhRetargeter(m, s, shares), std::invalid_argument);
   repose::RetargetOptions bad;
   bad.referenceFrame = m.frameCount;
-  EXPECT_THROW(repose::BvhRetargeter(m, s, {{"LeftUpLeg", "left_hip"}}, bad), std::invalid_argument);
-  EXPECT_THROW(repose::BvhRetargeter(m, s, {{"LeftUpLeg", "left_hip"}}).pose(-1), std::invalid_argument);
+  EXPECT_THROW(repose::BvhRetargeter(m, s, follow({{"LeftUpLeg", "left_hip"}}), bad), std::invalid_argument);
+  EXPECT_THROW(repose::BvhRetargeter(m, s, follow({{"LeftUpLeg", "left_hip"}})).pose(-1), std::invalid_argument);
+  repose::RetargetOptions negative;
+  negative.unitScaleMm = -10;
+  EXPECT_THROW(repose::BvhRetargeter(m, s, follow({{"LeftUpLeg", "left_hip"}}), negative), std::invalid_argument);
   EXPECT_THROW(repose::parseRetargetMode("sideways"), std::invalid_argument);
   const repose::BvhJointMap map = repose::parseJointMapJson(R"({"map": {"LeftUpLeg": "left_hip", "Hips": "pelvis"}})");
-  EXPECT_EQ(map.size(), 2u);
-  EXPECT_EQ(map.at("Hips"), "pelvis");
+  EXPECT_EQ(map.joints.size(), 2u);
+  EXPECT_EQ(map.joints.at("Hips"), "pelvis");
   EXPECT_THROW(repose::parseJointMapJson(R"({"LeftUpLeg": 3})"), std::invalid_argument);
   EXPECT_THROW(repose::parseJointMapJson("[1,2"), std::invalid_argument);
   // Joints not in the map follow their parents.
@@ -467,6 +507,335 @@ TEST(Retarget, CmuShortClipMotionBuilderNamesWalks) {
   }
   EXPECT_GT(maxKnee, 45);
   expectWalking(samples, "cmu_short_75frames");
+}
+
+// A lying scan rigged with the standard joint names (LPS mm): every vertebra from L5 ("spine") to
+// C1, a neck (C7) leaning 25 degrees forward as a lordotic cervical spine does, the head (skull),
+// jaw, clavicles, scapulae, limbs, and a patella joint as a hand-made rig may have (not a standard
+// name: the rig lets the patella ride with its femur). Parents first.
+repose::Skeleton standardSkeleton(bool clavicles = true) {
+  repose::Skeleton s;
+  s.joints.push_back(makeJoint("pelvis", -1, 0, 25, 960));
+  // Spinal levels 0 (L5) .. 23 (C1): a curved column, the neck part leaning forward (-y).
+  auto levelName = [](int level) -> std::string {
+    if (level == 0) return "spine";
+    if (level < 5) return "vertebra_L" + std::to_string(5 - level);
+    if (level < 17) return "vertebra_T" + std::to_string(17 - level);
+    if (level == 17) return "neck";
+    return "vertebra_C" + std::to_string(24 - level);
+  };
+  Eigen::Vector3d c(0, 50, 1010);
+  for (int level = 0; level < 24; ++level) {
+    s.joints.push_back(makeJoint(levelName(level), int(s.joints.size()) - 1, c.x(), c.y(), c.z()));
+    const double lean = level < 17 ? 8.0 * std::cos(level * 0.4) * kDeg : 25 * kDeg;
+    c += 24.0 * Eigen::Vector3d(0, -std::sin(lean), std::cos(lean));
+  }
+  const int c1 = int(s.joints.size()) - 1, t1 = s.find("vertebra_T1");
+  s.joints.push_back(makeJoint("head", c1, c.x(), c.y(), c.z()));
+  s.joints.push_back(makeJoint("jaw", int(s.joints.size()) - 1, 0, c.y() - 60, c.z() + 30));
+  for (double side : {1.0, -1.0}) {
+    const std::string pre = side > 0 ? "left_" : "right_";
+    int parent = t1;
+    if (clavicles) {
+      s.joints.push_back(makeJoint(pre + "clavicle", t1, side * 25, -20, 1420));
+      parent = int(s.joints.size()) - 1;
+    }
+    s.joints.push_back(makeJoint(pre + "scapula", parent, side * 150, 40, 1410));
+    const int base = int(s.joints.size());
+    s.joints.push_back(makeJoint(pre + "shoulder", base - 1, side * 180, 5, 1385));
+    s.joints.push_back(makeJoint(pre + "elbow", base, side * 190, 5, 1100));
+    s.joints.push_back(makeJoint(pre + "wrist", base + 1, side * 190, 5, 840));
+  }
+  for (double side : {1.0, -1.0}) {
+    const std::string pre = side > 0 ? "left_" : "right_";
+    const int base = int(s.joints.size());
+    s.joints.push_back(makeJoint(pre + "hip", 0, side * 100, 5, 920));
+    s.joints.push_back(makeJoint(pre + "knee", base, side * 90, 5, 490));
+    s.joints.push_back(makeJoint(pre + "ankle", base + 1, side * 90, 8, 80));
+    s.joints.push_back(makeJoint(pre + "patella", base, side * 90, -30, 510));
+  }
+  return s;
+}
+
+TEST(Retarget, DefaultMapDrivesTheStandardVocabulary) {
+  for (const char* file : {"cmu_131_01_walk.bvh", "cmu_short_75frames.bvh"}) {
+    const repose::BvhMotion m = repose::readBvhFile(kMocap + file);
+    const bool mb = std::string(file) == "cmu_short_75frames.bvh";
+    const repose::Skeleton s = standardSkeleton();
+    const repose::BvhJointMap map = repose::defaultCmuJointMap(m, s);
+    const repose::JointMapCoverage c = repose::jointMapCoverage(s, map);
+    std::map<std::string, std::string> driven(c.driven.begin(), c.driven.end());
+    std::printf("%s on %zu joints: %zu driven, undriven limbs %zu, following:", file, s.size(), c.driven.size(),
+                c.undrivenLimbs.size());
+    for (const std::string& f : c.following) std::printf(" %s", f.c_str());
+    std::printf("\n");
+    EXPECT_TRUE(c.undrivenLimbs.empty()) << file;
+    // Every joint but the jaw and the scapulae (they ride on the driven clavicles), and the patellae,
+    // which are not standard joints.
+    EXPECT_EQ(c.following, (std::vector<std::string>{"jaw", "left_scapula", "right_scapula"})) << file;
+    EXPECT_EQ(c.unknownNames, (std::vector<std::string>{"left_patella", "right_patella"})) << file;
+    EXPECT_EQ(driven.size(), s.size() - 5) << file;
+    EXPECT_EQ(driven["pelvis"], "Hips");
+    EXPECT_EQ(driven["left_knee"], mb ? "LeftLeg" : "LeftKnee") << file;
+    EXPECT_EQ(driven["right_ankle"], mb ? "RightFoot" : "RightAnkle") << file;
+    EXPECT_EQ(driven["left_clavicle"], mb ? "LeftShoulder" : "LeftCollar") << file;
+    EXPECT_EQ(driven["left_shoulder"], mb ? "LeftArm" : "LeftShoulder") << file;
+    EXPECT_EQ(driven["right_wrist"], mb ? "RightHand" : "RightWrist") << file;
+    EXPECT_EQ(driven["head"], "Head") << file;
+    EXPECT_EQ(driven["vertebra_L3"], mb ? "LowerBack 20%" : "lowerback 20%") << file;
+    EXPECT_EQ(driven["vertebra_C2"], mb ? "Neck1 33%" : "Neck 33%") << file;
+    // Each CMU trunk joint's rotation is shared out exactly once over the vertebrae.
+    std::map<std::string, double> total;
+    for (const auto& [joint, shares] : map.shares)
+      for (const repose::BvhShare& share : shares) total[share.bvhJoint] += share.fraction;
+    EXPECT_EQ(total.size(), 6u) << file;
+    for (const auto& [bvh, sum] : total) EXPECT_NEAR(sum, 1.0, 1e-12) << file << " " << bvh;
+    // Without clavicles the collar drives the scapula.
+    const repose::BvhJointMap noClavicle = repose::defaultCmuJointMap(m, standardSkeleton(false));
+    EXPECT_EQ(noClavicle.joints.at(mb ? "LeftShoulder" : "LeftCollar"), "left_scapula") << file;
+    EXPECT_TRUE(repose::jointMapCoverage(standardSkeleton(false), noClavicle).undrivenLimbs.empty()) << file;
+  }
+}
+
+// A lumbar and lower thoracic scan (as TotalSegmentator's abdominal CT): the vertebrae share the
+// lower back and a sixth of the upper back each.
+TEST(Retarget, DefaultMapSharesTheSpineByLevel) {
+  repose::Skeleton s;
+  s.joints.push_back(makeJoint("pelvis", -1, 0, 25, 960));
+  s.joints.push_back(makeJoint("spine", 0, 0, 50, 1010));
+  const char* levels[] = {"vertebra_L4", "vertebra_L3", "vertebra_L2", "vertebra_L1", "vertebra_T12", "vertebra_T11"};
+  for (int k = 0; k < 6; ++k) s.joints.push_back(makeJoint(levels[k], k + 1, 0, 50, 1040 + 30 * k));
+  s.joints.push_back(makeJoint("left_hip", 0, 100, 5, 920));
+  s.joints.push_back(makeJoint("right_hip", 0, -100, 5, 920));
+  const repose::BvhMotion m = repose::readBvhFile(kMocap + "cmu_131_01_walk.bvh");
+  const repose::BvhJointMap map = repose::defaultCmuJointMap(m, s);
+  ASSERT_EQ(map.shares.size(), 7u);
+  for (const char* joint : {"spine", "vertebra_L4", "vertebra_L1"}) {
+    ASSERT_EQ(map.shares.at(joint).size(), 1u) << joint;
+    EXPECT_EQ(map.shares.at(joint)[0].bvhJoint, "lowerback");
+    EXPECT_NEAR(map.shares.at(joint)[0].fraction, 0.2, 1e-12) << joint;
+  }
+  EXPECT_EQ(map.shares.at("vertebra_T11")[0].bvhJoint, "Chest");
+  EXPECT_NEAR(map.shares.at("vertebra_T11")[0].fraction, 1.0 / 6, 1e-12);
+  // Over the walk the lumbar chain together bends as the clip's lower back, each vertebra a fifth.
+  const repose::BvhRetargeter retarget(m, s, map);
+  for (int f = 500; f < 700; f += 25) {
+    const repose::Pose pose = retarget.pose(f);
+    const auto g = repose::forwardKinematics(s, pose);
+    const auto b = repose::bvhGlobalPose(m, f);
+    const Eigen::Matrix3d clip = bvhRotation(m, b, "Hips").transpose() * bvhRotation(m, b, "lowerback");
+    const Eigen::Matrix3d scan = g[0].linear().transpose() * g[s.find("vertebra_L1")].linear();
+    EXPECT_LT(angleOf(clip.transpose() * scan), 0.5) << "frame " << f;
+    EXPECT_NEAR(angleOf(pose.rotations.at("vertebra_L3").toRotationMatrix()), angleOf(clip) / 5, 1e-6) << "frame " << f;
+  }
+}
+
+// A neck scan cut below the skull: the rig calls C7 "neck" and names the vertebrae above it, with no
+// head joint. The neck is the cervical joint it is (lower neck and upper neck over C7-C1), not the
+// skull it would be without cervical vertebrae, and the clip's head drives nothing.
+TEST(Retarget, DefaultMapKnowsANeckWithoutHead) {
+  repose::Skeleton s;
+  s.joints.push_back(makeJoint("pelvis", -1, 0, 25, 960));
+  s.joints.push_back(makeJoint("vertebra_T1", 0, 0, 50, 1400));
+  s.joints.push_back(makeJoint("neck", 1, 0, 45, 1425));
+  for (int c = 6; c >= 1; --c)
+    s.joints.push_back(makeJoint("vertebra_C" + std::to_string(c), int(s.joints.size()) - 1, 0, 40, 1425 + 20 * (7 - c)));
+  const repose::BvhMotion m = repose::readBvhFile(kMocap + "cmu_131_01_walk.bvh");
+  const repose::BvhJointMap map = repose::defaultCmuJointMap(m, s);
+  ASSERT_EQ(map.shares.at("neck").size(), 1u);
+  EXPECT_EQ(map.shares.at("neck")[0].bvhJoint, "lowerneck");
+  EXPECT_NEAR(map.shares.at("neck")[0].fraction, 0.25, 1e-12);
+  EXPECT_EQ(map.shares.at("vertebra_C1")[0].bvhJoint, "Neck");
+  EXPECT_NEAR(map.shares.at("vertebra_C1")[0].fraction, 1.0 / 3, 1e-12);
+  for (const auto& [joint, shares] : map.shares)
+    for (const repose::BvhShare& share : shares) EXPECT_NE(share.bvhJoint, "Head") << joint;
+  // Without the cervical vertebrae the same name is the skull's joint: it takes the clip's head.
+  s.joints.resize(3);
+  const repose::BvhJointMap skull = repose::defaultCmuJointMap(m, s);
+  EXPECT_EQ(skull.shares.at("neck").back().bvhJoint, "Head");
+}
+
+// Pitch (degrees, forward flexion positive) of rotation r about the body's left-right axis: where r
+// takes the superior axis, in the sagittal plane.
+double pitch(const Eigen::Matrix3d& r) {
+  const Eigen::Vector3d up = r * Eigen::Vector3d::UnitZ();
+  return std::atan2(-up.y(), up.z()) / kDeg;
+}
+
+// Head pitch relative to the upper trunk, scan against clip, over the clip; returns the worst gap.
+double worstHeadPitchGap(const repose::BvhMotion& m, const repose::Skeleton& s, const repose::BvhJointMap& map,
+                         const std::string& scanTrunk, const std::string& bvhTrunk, double* clipRange) {
+  const repose::BvhRetargeter retarget(m, s, map);
+  double worst = 0, lo = 1e9, hi = -1e9;
+  for (int f = 0; f < m.frameCount; f += 5) {
+    const auto g = repose::forwardKinematics(s, retarget.pose(f));
+    const auto b = repose::bvhGlobalPose(m, f);
+    const double clip = pitch(bvhRotation(m, b, bvhTrunk).transpose() * bvhRotation(m, b, "Head"));
+    const double scan = pitch(g[s.find(scanTrunk)].linear().transpose() * g[s.find("head")].linear());
+    worst = std::max(worst, std::abs(scan - clip));
+    lo = std::min(lo, clip), hi = std::max(hi, clip);
+  }
+  clipRange[0] = lo, clipRange[1] = hi;
+  return worst;
+}
+
+// A hand-written map that sends the clip's neck to the scan's C7 and its head to the skull once
+// pitched the head back by about 60 degrees: the neck's rest alignment (the scan's forward-leaning
+// cervical spine onto the clip's vertical one) was carried over to the head, and the upper neck's
+// rotation counted twice. The head must follow the clip's head relative to the upper trunk.
+TEST(Retarget, HeadKeepsTheClipsPitchWithAHandWrittenMap) {
+  const repose::Skeleton s = standardSkeleton();
+  const struct {
+    const char* file;
+    repose::BvhJointMap map;
+    const char* thorax;
+  } cases[] = {
+      {"cmu_short_75frames.bvh",
+       follow({{"Hips", "pelvis"}, {"LowerBack", "spine"}, {"Spine1", "vertebra_T12"}, {"Neck", "neck"},
+               {"Head", "head"}, {"LeftUpLeg", "left_hip"}, {"RightUpLeg", "right_hip"}}),
+       "Spine1"},
+      {"cmu_131_01_walk.bvh",
+       follow({{"Hips", "pelvis"}, {"lowerback", "spine"}, {"Chest2", "vertebra_T12"}, {"lowerneck", "neck"},
+               {"Head", "head"}, {"LeftHip", "left_hip"}, {"RightHip", "right_hip"}}),
+       "Chest2"},
+  };
+  for (const auto& c : cases) {
+    const repose::BvhMotion m = repose::readBvhFile(kMocap + c.file);
+    double range[2];
+    const double gap = worstHeadPitchGap(m, s, c.map, "vertebra_T12", c.thorax, range);
+    std::printf("%s, hand-written map: clip head pitch %.1f..%.1f deg, scan head off it by %.2f deg at most\n",
+                c.file, range[0], range[1], gap);
+    EXPECT_LT(gap, 20) << c.file;
+    EXPECT_LT(gap, 1e-6) << c.file;  // one factor per mapped pair: exact
+  }
+}
+
+// The built-in map on the full vocabulary: the head's pitch against T1 follows the clip's against
+// its thorax (the vertebrae share out whole CMU joints, so exactly), and the knees flex as the clip's
+// (whose subject walks with knees bent 20-50 degrees in stance and up to about 100 in swing).
+TEST(Retarget, DefaultMapHeadPitchAndKneeFlexionOverTheWalk) {
+  const repose::Skeleton s = standardSkeleton();
+  for (const char* file : {"cmu_131_01_walk.bvh", "cmu_short_75frames.bvh"}) {
+    const repose::BvhMotion m = repose::readBvhFile(kMocap + file);
+    const repose::BvhJointMap map = repose::defaultCmuJointMap(m, s);
+    const bool mb = std::string(file) == "cmu_short_75frames.bvh";
+    double range[2];
+    const double gap = worstHeadPitchGap(m, s, map, "vertebra_T1", mb ? "Spine1" : "Chest2", range);
+    const repose::BvhRetargeter retarget(m, s, map);
+    const int first = mb ? 0 : 500, last = mb ? m.frameCount - 1 : 700;
+    double kneeLo = 1e9, kneeHi = 0, clipLo = 1e9, clipHi = 0;
+    for (const GaitSample& x : gait(s, retarget, first, last, 2)) {
+      kneeLo = std::min({kneeLo, x.kneeL, x.kneeR}), kneeHi = std::max({kneeHi, x.kneeL, x.kneeR});
+      const auto b = repose::bvhGlobalPose(m, x.frame);
+      for (const char* side : {"Left", "Right"}) {
+        const std::string pre = side;
+        const double clip = std::acos(std::clamp(bvhBone(m, b, pre + (mb ? "UpLeg" : "Hip"), pre + (mb ? "Leg" : "Knee"))
+                                                     .dot(bvhBone(m, b, pre + (mb ? "Leg" : "Knee"), pre + (mb ? "Foot" : "Ankle"))),
+                                                 -1.0, 1.0)) / kDeg;
+        clipLo = std::min(clipLo, clip), clipHi = std::max(clipHi, clip);
+      }
+    }
+    std::printf("%s: head pitch (clip %.1f..%.1f deg) within %.2f deg; knee flexion %.1f..%.1f deg over frames "
+                "%d-%d (the clip's %.1f..%.1f)\n", file, range[0], range[1], gap, kneeLo, kneeHi, first, last, clipLo, clipHi);
+    EXPECT_LT(gap, 20) << file;
+    EXPECT_NEAR(kneeLo, clipLo, 0.5) << file;
+    EXPECT_NEAR(kneeHi, clipHi, 0.5) << file;
+    EXPECT_GT(kneeHi, 45) << file;
+  }
+}
+
+// Feet and hands keep the clip's angle to the shank and forearm (their limb's rest alignment, the
+// same rest reference as the bone they hang from).
+TEST(Retarget, LimbEndsKeepTheClipsAngleToTheirLimb) {
+  const repose::Skeleton s = standardSkeleton();
+  for (const char* file : {"cmu_131_01_walk.bvh", "cmu_short_75frames.bvh"}) {
+    const repose::BvhMotion m = repose::readBvhFile(kMocap + file);
+    const bool mb = std::string(file) == "cmu_short_75frames.bvh";
+    const repose::BvhRetargeter retarget(m, s, repose::defaultCmuJointMap(m, s));
+    const std::pair<std::string, std::string> ends[] = {
+        {mb ? "LeftLeg" : "LeftKnee", mb ? "LeftFoot" : "LeftAnkle"},
+        {mb ? "RightForeArm" : "RightElbow", mb ? "RightHand" : "RightWrist"}};
+    const char* scanEnds[] = {"left_ankle", "right_wrist"};
+    double worst = 0;
+    for (int f = 0; f < m.frameCount; f += 7) {
+      const repose::Pose pose = retarget.pose(f);
+      const auto b = repose::bvhGlobalPose(m, f);
+      for (int e = 0; e < 2; ++e) {
+        const double clip = angleOf(bvhRotation(m, b, ends[e].first).transpose() * bvhRotation(m, b, ends[e].second));
+        worst = std::max(worst, std::abs(angleOf(pose.rotations.at(scanEnds[e]).toRotationMatrix()) - clip));
+      }
+    }
+    std::printf("%s: ankle and wrist angles off the clip's by %.2g deg at most\n", file, worst);
+    EXPECT_LT(worst, 1e-6) << file;
+  }
+}
+
+// A clip in centimetres (the CMU clip rescaled) gives the same poses as the original once its units
+// are inferred, and the same as the original read with --unit-mm 10.
+TEST(Retarget, ClipInCentimetresGivesTheSamePoses) {
+  const repose::BvhMotion cmu = repose::readBvhFile(kMocap + "cmu_short_75frames.bvh");
+  repose::BvhMotion cm = cmu;
+  repose::scaleBvhLengths(cm, 25.4 / 0.45 / 10);
+  const repose::Skeleton s = standardSkeleton();
+  const repose::BvhRetargeter a(cmu, s, repose::defaultCmuJointMap(cmu, s));
+  const repose::BvhRetargeter b(cm, s, repose::defaultCmuJointMap(cm, s));
+  EXPECT_EQ(b.units().name, "centimetres");
+  repose::RetargetOptions cmuAsCm;
+  cmuAsCm.unitScaleMm = 10;  // the old default read the cm clip at 56.44 mm per unit: 5.6 times too far
+  const repose::BvhRetargeter wrong(cm, s, repose::defaultCmuJointMap(cm, s), [] {
+    repose::RetargetOptions o;
+    o.unitScaleMm = 25.4 / 0.45;
+    return o;
+  }());
+  const repose::BvhRetargeter given(cm, s, repose::defaultCmuJointMap(cm, s), cmuAsCm);
+  double worstAngle = 0, worstShift = 0;
+  for (int f = 0; f < cmu.frameCount; ++f) {
+    const repose::Pose pa = a.pose(f), pb = b.pose(f), pg = given.pose(f);
+    for (const auto& [joint, q] : pa.rotations) worstAngle = std::max(worstAngle, q.angularDistance(pb.rotations.at(joint)));
+    worstShift = std::max({worstShift, (pa.translation - pb.translation).norm(), (pg.translation - pb.translation).norm()});
+  }
+  const double travelled = a.pose(cmu.frameCount - 1).translation.norm();
+  std::printf("cm clip: %.0f mm travelled, poses within %.2g rad and %.2g mm of the CMU clip's; read as CMU units: "
+              "%.0f mm\n", travelled, worstAngle, worstShift, wrong.pose(cmu.frameCount - 1).translation.norm());
+  EXPECT_LT(worstAngle, 1e-9);
+  EXPECT_LT(worstShift, 1e-6);
+  EXPECT_GT(travelled, 100);
+  EXPECT_NEAR(wrong.pose(cmu.frameCount - 1).translation.norm() / travelled, 25.4 / 0.45 / 10, 1e-6);
+}
+
+// What a map leaves undriven, for animate's warning and --strict.
+TEST(Retarget, CoverageListsUndrivenLimbJoints) {
+  const repose::Skeleton s = standardSkeleton();
+  // A hand-written map without elbows and knees.
+  const repose::BvhJointMap partial = follow({{"Hips", "pelvis"}, {"LeftUpLeg", "left_hip"}, {"RightUpLeg", "right_hip"},
+                                              {"LeftFoot", "left_ankle"}, {"RightFoot", "right_ankle"},
+                                              {"LeftShoulder", "left_clavicle"}, {"LeftArm", "left_shoulder"},
+                                              {"RightArm", "right_shoulder"}, {"LeftHand", "left_wrist"},
+                                              {"RightHand", "right_wrist"}});
+  const repose::JointMapCoverage c = repose::jointMapCoverage(s, partial);
+  EXPECT_EQ(c.undrivenLimbs, (std::vector<std::string>{"left_elbow", "right_clavicle", "right_scapula", "right_elbow",
+                                                        "left_knee", "right_knee"}));
+  EXPECT_EQ(c.driven.size(), 10u);
+  // A rig whose joints are not named by the vocabulary: nothing is a recognised limb joint, the
+  // built-in map drives the pelvis alone, which the retargeter refuses.
+  repose::Skeleton odd;
+  odd.joints.push_back(makeJoint("pelvis", -1, 0, 25, 960));
+  odd.joints.push_back(makeJoint("femur_left", 0, 100, 5, 920));
+  odd.joints.push_back(makeJoint("tibia_left", 1, 90, 5, 490));
+  const repose::BvhMotion m = repose::readBvhFile(kMocap + "cmu_short_75frames.bvh");
+  const repose::BvhJointMap map = repose::defaultCmuJointMap(m, odd);
+  EXPECT_TRUE(repose::jointMapCoverage(odd, map).undrivenLimbs.empty());
+  EXPECT_EQ(repose::jointMapCoverage(odd, map).unknownNames, (std::vector<std::string>{"femur_left", "tibia_left"}));
+  EXPECT_TRUE(repose::jointMapCoverage(odd, map).following.empty());
+  EXPECT_THROW(repose::BvhRetargeter(m, odd, map), std::invalid_argument);
+  // No standard name at all, or a clip with no CMU names: the built-in map refuses.
+  odd.joints[0].name = "root";
+  EXPECT_THROW(repose::defaultCmuJointMap(m, odd), std::invalid_argument);
+  EXPECT_THROW(repose::defaultCmuJointMap(knownMotion(), repose::Skeleton()), std::invalid_argument);
+  EXPECT_THROW(repose::jointMapCoverage(s, follow({{"Hips", "no_such_joint"}})), std::invalid_argument);
+  // The patella rides with its femur in the standard vocabulary: a patella joint is a name no
+  // built-in map knows.
+  EXPECT_EQ(c.unknownNames, (std::vector<std::string>{"left_patella", "right_patella"}));
 }
 
 }  // namespace

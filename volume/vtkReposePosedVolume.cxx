@@ -165,6 +165,16 @@ std::array<int, 6> ClampedSubExtent(const int full[6], const int sub[6])
   return e;
 }
 
+// The posed grid's bound: the body's margin covers the extrapolation, so cropping never cuts it.
+repose::PosedGridOptions GridOptions(const repose::ImageGrid& rest, int padding, double extrapolation, double maxVoxels)
+{
+  repose::PosedGridOptions options;
+  options.paddingVoxels = padding;
+  options.bodyPaddingVoxels = std::max(padding, repose::extrapolationReachVoxels(rest, extrapolation));
+  options.maxVoxels = maxVoxels;
+  return options;
+}
+
 void GridToArrays(const repose::ImageGrid& g, int ext[6], double origin[3], double spacing[3], double direction[9])
 {
   for (int a = 0; a < 3; ++a)
@@ -239,7 +249,8 @@ int vtkReposePosedVolume::RequestInformation(
   {
     const repose::ImageGrid rest = GridFromInfo(ext, origin, spacing, direction);
     const repose::ImageGrid out =
-      repose::posedOutputGrid(rest, ToPoints(posed->GetPoints()), this->PaddingVoxels);
+      repose::posedOutputGrid(rest, ToPoints(posed->GetPoints()),
+        GridOptions(rest, this->PaddingVoxels, this->ExtrapolationDistance, this->MaxVoxels));
     GridToArrays(out, ext, origin, spacing, direction);
     std::copy(ext, ext + 6, this->FullOutputExtent);
     if (this->RestrictToSubExtent)
@@ -335,7 +346,8 @@ int vtkReposePosedVolume::RequestData(
     }
     const repose::Points& restNodes = in.RestNodes;
     const repose::Points posedNodes = ToPoints(posedMesh->GetPoints());
-    const repose::ImageGrid outGrid = repose::posedOutputGrid(rest, posedNodes, this->PaddingVoxels);
+    const repose::ImageGrid outGrid = repose::posedOutputGrid(
+      rest, posedNodes, GridOptions(rest, this->PaddingVoxels, this->ExtrapolationDistance, this->MaxVoxels));
     int full[6];
     double origin[3], spacing[3];
     GridToArrays(outGrid, full, origin, spacing, direction);
@@ -486,6 +498,7 @@ void vtkReposePosedVolume::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Interpolation: " << (this->Interpolation == Nearest ? "Nearest" : "Linear") << "\n";
   os << indent << "BackgroundValue: " << this->BackgroundValue << "\n";
   os << indent << "PaddingVoxels: " << this->PaddingVoxels << "\n";
+  os << indent << "MaxVoxels: " << this->MaxVoxels << "\n";
   os << indent << "ExtrapolationDistance: " << this->ExtrapolationDistance << "\n";
   os << indent << "CoveredVoxels: " << this->CoveredVoxels << "\n";
   os << indent << "ExtrapolatedVoxels: " << this->ExtrapolatedVoxels << "\n";

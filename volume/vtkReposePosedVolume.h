@@ -39,6 +39,15 @@ public:
   vtkSetClampMacro(PaddingVoxels, int, 0, 1000);
   vtkGetMacro(PaddingVoxels, int);
 
+  /// The output lattice is the rest image's, holding the posed body and, while that at most doubles
+  /// the rest image's voxels, the rest extent too (a pose in place keeps the rest voxel indices); a
+  /// body that moved away (root motion) gets a grid of its own size, its margin covering the
+  /// extrapolation.
+  /// A grid of more than MaxVoxels voxels is an error that gives its size and the body's span
+  /// (default 512 M = 5.12e8, 2 GB of labels; 0 = no limit).
+  vtkSetClampMacro(MaxVoxels, double, 0, 1e15);
+  vtkGetMacro(MaxVoxels, double);
+
   /// How far (mm) the posed mesh is extrapolated outward to fill voxels outside it: ceil(distance /
   /// finest spacing) + 2 layers of voxel neighbours, each voxel taking the map of the neighbouring tet
   /// it lies least far outside of; labels only where the sampled rest label is not BackgroundValue,
@@ -93,6 +102,7 @@ protected:
   int Interpolation = Nearest;
   double BackgroundValue = 0;
   int PaddingVoxels = 2;
+  double MaxVoxels = 512e6;
   double ExtrapolationDistance = -1.0;
   bool RigidBones = true;
   vtkIdType RigidBoneVoxels = 0;

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -385,5 +386,100 @@ std::vector<Eigen::Isometry3d> bvhGlobalPose(const BvhMotion& motion, int frame)
 }
 
 std::vector<Eigen::Isometry3d> bvhRestPose(const BvhMotion& motion) { return bvhGlobalPose(motion, nullptr); }
+
+void scaleBvhLengths(BvhMotion& motion, double factor) {
+  if (!(factor > 0) || !std::isfinite(factor)) throw std::invalid_argument("BVH: a length scale must be positive");
+  for (BvhJoint& joint : motion.joints) {
+    joint.offset *= factor;
+    joint.endSite *= factor;
+    for (std::size_t k = 0; k < joint.channels.size(); ++k)
+      if (joint.channels[k] == BvhChannel::Xposition || joint.channels[k] == BvhChannel::Yposition ||
+          joint.channels[k] == BvhChannel::Zposition)
+        motion.frames.col(joint.firstChannel + int(k)) *= factor;
+  }
+}
+
+namespace {
+
+std::string lowerCase(std::string s) {
+  for (char& c : s)
+    if (c >= 'A' && c <= 'Z') c = char(c - 'A' + 'a');
+  return s;
+}
+
+bool contains(const std::string& s, const char* part) { return s.find(part) != std::string::npos; }
+
+// Knee joints by name: LeftKnee, LeftLeg, mixamorig:RightLeg, l_shin, ltibia, LowerLeg_R, RCalf.
+bool namesKnee(const std::string& jointName) {
+  const std::string n = lowerCase(jointName);
+  for (const char* part : {"knee", "shin", "calf", "tibia", "lowerleg", "lowleg", "lower_leg"})
+    if (contains(n, part)) return true;
+  const auto leg = n.rfind("leg");
+  return leg != std::string::npos && leg + 3 == n.size() && !contains(n, "up");
+}
+
+struct LengthUnit {
+  const char* name;
+  double mm;
+};
+
+}  // namespace
+
+BvhUnits inferBvhUnits(const BvhMotion& motion) {
+  BvhUnits units;
+  // Leg: the knee's offset (hip to knee) plus its first child's or its End Site's (knee to ankle).
+  double legs = 0;
+  int knees = 0;
+  for (std::size_t k = 0; k < motion.joints.size(); ++k) {
+    const BvhJoint& knee = motion.joints[k];
+    if (knee.parent < 0 || !namesKnee(knee.name)) continue;
+    double shank = knee.hasEndSite ? knee.endSite.norm() : 0.0;
+    for (const BvhJoint& child : motion.joints)
+      if (child.parent == int(k)) {
+        shank = child.offset.norm();
+        break;
+      }
+    if (shank <= 0 || knee.offset.norm() <= 0) continue;
+    legs += knee.offset.norm() + shank;
+    ++knees;
+  }
+  double reference = 800;  // mm, an adult's hip joint to ankle joint
+  if (knees > 0) {
+    units.measure = "leg length";
+    units.measuredUnits = legs / knees;
+  } else {
+    // Rest pose extent (standing height or arm span, joint centres and End Sites): about 1.5 m.
+    const std::vector<Eigen::Isometry3d> rest = bvhRestPose(motion);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (std::size_t j = 0; j < rest.size(); ++j) {
+      lo = lo.cwiseMin(rest[j].translation());
+      hi = hi.cwiseMax(rest[j].translation());
+      if (motion.joints[j].hasEndSite) {
+        const Eigen::Vector3d end = rest[j] * motion.joints[j].endSite;
+        lo = lo.cwiseMin(end);
+        hi = hi.cwiseMax(end);
+      }
+    }
+    units.measure = "rest pose height";
+    units.measuredUnits = rest.empty() ? 0.0 : (hi - lo).maxCoeff();
+    reference = 1500;
+  }
+  if (!(units.measuredUnits > 0) || !std::isfinite(units.measuredUnits))
+    throw std::invalid_argument("BVH: the skeleton has no length (every OFFSET is zero): its units cannot be "
+                                "inferred; give them (millimetres per unit)");
+  static const LengthUnit kUnits[] = {{"millimetres", 1.0},   {"centimetres", 10.0},
+                                      {"inches", 25.4},       {"CMU units of 1/0.45 inch", 25.4 / 0.45},
+                                      {"feet", 304.8},        {"metres", 1000.0}};
+  double best = std::numeric_limits<double>::infinity();
+  for (const LengthUnit& u : kUnits) {
+    const double misfit = std::abs(std::log(units.measuredUnits * u.mm / reference));
+    if (misfit < best) {
+      best = misfit;
+      units.name = u.name;
+      units.mmPerUnit = u.mm;
+    }
+  }
+  return units;
+}
 
 }  // namespace repose

@@ -51,4 +51,25 @@ std::vector<Eigen::Isometry3d> bvhGlobalPose(const BvhMotion& motion, int frame)
 /// All channels zero: the rest pose given by the offsets (a T-pose in most files).
 std::vector<Eigen::Isometry3d> bvhRestPose(const BvhMotion& motion);
 
+/// Multiplies every length by `factor` (offsets, End Sites, position channels): the same clip in
+/// another unit, e.g. 5.644 turns CMU units into centimetres. Throws unless factor is positive.
+void scaleBvhLengths(BvhMotion& motion, double factor);
+
+/// Length unit of a clip. BVH files do not say theirs: CMU conversions use 1/0.45 inch (56.44 mm),
+/// others centimetres, metres, inches or millimetres.
+struct BvhUnits {
+  double mmPerUnit = 0;      ///< millimetres per BVH unit
+  std::string name;          ///< "centimetres", "CMU units of 1/0.45 inch", ...
+  std::string measure;       ///< what was compared with a human's: "leg length" or "rest pose height"
+  double measuredUnits = 0;  ///< that length in BVH units
+};
+/// Infers the unit from the skeleton's proportions: the leg length (thigh + shank: the offset of each
+/// knee joint, found by name (knee, shin, calf, tibia, lower leg, or ...Leg but not ...UpLeg), plus
+/// its child's, averaged over the knees) against an adult's 800 mm hip to ankle; without a knee, the
+/// rest pose's largest extent (joints and End Sites) against 1500 mm. Of millimetres, centimetres,
+/// inches, CMU units, feet and metres, the unit whose length comes closest (by ratio) wins: units are
+/// at least 2.2 times apart, so a body from 0.55 to 1.2 times an adult's reads right. Throws
+/// std::invalid_argument when the skeleton has no length (every offset zero).
+BvhUnits inferBvhUnits(const BvhMotion& motion);
+
 }  // namespace repose

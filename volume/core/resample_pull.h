@@ -54,10 +54,33 @@ struct PullResampleOptions {
 /// direction, origin at voxel (i0, j0, k0). Throws if the extent is empty or not inside the grid.
 ImageGrid extentGrid(const ImageGrid& grid, const std::array<int, 6>& extent);
 
-/// Output grid: the rest grid's spacing and direction, its lattice extended (by whole voxels, so
-/// unmoved anatomy lands on the same voxel centres) to hold the rest extent and the posed nodes,
-/// plus `paddingVoxels` on every side.
+/// How posedOutputGrid bounds the posed volume.
+struct PosedGridOptions {
+  int paddingVoxels = 2;  ///< voxels beyond the posed nodes' box on every side
+  /// Margin of a grid that holds the body only (below); negative = paddingVoxels. Give the
+  /// extrapolation's reach (extrapolationReachVoxels) so that cropping never cuts the posed body.
+  int bodyPaddingVoxels = -1;
+  /// The grid also holds the rest grid's extent while that keeps it within this factor of the
+  /// voxels of the (padded) rest grid or of the body's own box, whichever is larger: a pose in place
+  /// keeps the rest grid's voxel indices, as before. Beyond it (the root moved away, e.g. along a
+  /// walk) the grid holds the posed body only. 0 = the body only.
+  double restExtentFactor = 2.0;
+  /// Largest voxel count; a larger grid throws std::invalid_argument saying its size and the posed
+  /// body's span (a body far from where it started: root motion, or motion read in the wrong unit).
+  /// 0 = no limit.
+  double maxVoxels = 0;
+};
+
+/// Output grid: the rest grid's spacing and direction, on the rest lattice (shifted by whole voxels,
+/// so unmoved anatomy lands on the same voxel centres), holding the posed nodes plus padding and,
+/// by options.restExtentFactor, the rest extent.
+ImageGrid posedOutputGrid(const ImageGrid& rest, const Points& posedNodes, const PosedGridOptions& options);
+/// The same with default options and this padding.
 ImageGrid posedOutputGrid(const ImageGrid& rest, const Points& posedNodes, int paddingVoxels = 2);
+
+/// Voxels beyond the posed mesh that the pull's extrapolation may write (0 when it is off), for
+/// PosedGridOptions::bodyPaddingVoxels.
+int extrapolationReachVoxels(const ImageGrid& rest, double extrapolationDistance);
 
 /// Rest-grid mask: 1 where the voxel centre lies in some rest tet. Depends on the rest mesh and grid
 /// only, so compute it once per rest mesh (it costs about one resampling pass).
