@@ -12,6 +12,7 @@ packages=(
   libsuitesparse-dev libopenblas0-pthread
   libgtest-dev googletest
   python3-numpy python3-scipy
+  python3-distributed python3-yaml  # repose batch: Dask's local and remote clusters, YAML manifests
   xvfb xauth
 )
 missing=()
