@@ -13,6 +13,7 @@ packages=(
   libgtest-dev googletest
   python3-numpy python3-scipy
   python3-distributed python3-yaml  # repose batch: Dask's local and remote clusters, YAML manifests
+  python3-psutil  # the batch test finds and kills a Dask worker (also a dependency of python3-distributed)
   xvfb xauth
 )
 missing=()

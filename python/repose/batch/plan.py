@@ -36,7 +36,7 @@ def _posing(settings, image):
     """What a posed result depends on besides its case and pose."""
     outputs = [o for o in settings["outputs"] if o != "image" or image]
     return {"skinning": settings["skinning"], "relax": settings["relax"], "outputs": outputs,
-            "format": settings["format"], "image": image["sha256"] if image and "image" in outputs else None}
+            "format": settings["format"], "image_sha256": image["sha256"] if image and "image" in outputs else None}
 
 
 def plan_batch(manifest, out_dir, version, executable):

@@ -28,6 +28,9 @@ DIR/batch.json the exact inputs with their sha256, the settings and the versions
 task failed (its message is in both records)."""
 
 
+WORKER_WAIT_SECONDS = 60  # the workers of a cluster just started (Slurm, Kubernetes) come in after its scheduler
+
+
 class UsageError(Exception):
     pass
 
@@ -96,7 +99,7 @@ def _connect(args):
     workers = args.workers or cores
     bokeh = importlib.util.find_spec("bokeh") is not None  # Dask's dashboard needs it (not in Debian 12)
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=":0" if bokeh else None, silence_logs=logging.ERROR)
+                           dashboard_address=":0" if bokeh else None, silence_logs=logging.CRITICAL)
     client = Client(cluster)
     return client, cluster, max(1, cores // workers), client.dashboard_link if bokeh else ""
 
@@ -111,9 +114,14 @@ def _check_workers(client, executable):
             return f"cannot import the repose package ({e}); start the worker with PYTHONPATH set to it"
         return "" if os.access(path, os.X_OK) else f"{path}: not found on the worker (the same build is needed there)"
 
+    if not client.scheduler_info()["workers"]:
+        print(f"batch: waiting up to {WORKER_WAIT_SECONDS} s for a worker of {client.scheduler.address}", flush=True)
+        try:
+            client.wait_for_workers(1, timeout=WORKER_WAIT_SECONDS)
+        except Exception:  # noqa: BLE001 - Dask's TimeoutError (asyncio's or its own, by version)
+            raise RuntimeError(f"the scheduler {client.scheduler.address} has no workers "
+                               f"(none came in {WORKER_WAIT_SECONDS} s)") from None
     answers = client.run(probe)
-    if not answers:
-        raise RuntimeError(f"the scheduler {client.scheduler.address} has no workers")
     for worker, problem in sorted(answers.items()):
         if problem:
             raise RuntimeError(f"worker {worker}: {problem}")
@@ -127,16 +135,20 @@ def _submit(client, to_run, start, threads):
     # subject -> its prepare's future, or what an earlier run left: complete, or failed (not retried)
     prepared = {r["subject"]: {"status": "done" if r["status"] == "skipped" else r["status"],
                                "message": r.get("message", "")} for r in start if r["kind"] == "prepare"}
+    # One subject's poses before the next's: a worker then loads each case once, not at every switch.
+    # Dask groups tasks by their keys' words before the run id, so all poses are one group, ordered as one.
+    order = {name: i for i, name in enumerate(dict.fromkeys(r["subject"] for r in start))}
     futures = {}
     for t in to_run:
         if t["kind"] == "prepare":
-            f = client.submit(prepare_subject, t, key=f"prepare-{t['subject']}-{run_id}", priority=10, pure=False)
+            f = client.submit(prepare_subject, t, key=f"prepare-{run_id}-{t['subject']}", priority=10, pure=False)
             prepared[t["subject"]] = f
             futures[f] = t
     for t in to_run:
         if t["kind"] != "prepare":
             f = client.submit(pose_task, prepared[t["subject"]], {**t, "threads": threads},
-                              key=f"{t['kind']}-{t['subject']}-{t['task']}-{run_id}", pure=False)
+                              key=f"{t['kind']}-{run_id}-{t['subject']}-{t['task']}",
+                              priority=-order[t["subject"]], pure=False)
             futures[f] = t
     return futures
 
@@ -153,7 +165,7 @@ def _header(args, manifest, subjects, run):
 def _run(args, manifest, subjects, tasks, out_dir, executable):
     start, to_run = _triage(tasks, args.retry_failed, out_dir)
     run = {"started": _now(), "tasks": len(tasks), "to_run": len(to_run)}
-    by_key = {r["key"]: i for i, r in enumerate(start)}
+    by_out = {r["out"]: i for i, r in enumerate(start)}  # a key repeats when a result is asked twice
     print(f"batch: {len(subjects)} subjects, {len(tasks)} tasks: {len(to_run)} to run, "
           f"{sum(r['status'] == 'skipped' for r in start)} complete before, "
           f"{sum(r['status'] == 'failed' for r in start)} failed before"
@@ -167,15 +179,16 @@ def _run(args, manifest, subjects, tasks, out_dir, executable):
         client, cluster, threads, link = _connect(args)
         try:
             run["workers"] = _check_workers(client, executable) if args.scheduler else len(client.nthreads())
-            print(f"batch: {run['workers']} workers ({args.scheduler or 'local cluster'})"
-                  + (f", dashboard {link}" if link else ""), flush=True)
+            print(f"batch: {run['workers']} worker{'s' if run['workers'] != 1 else ''} on "
+                  f"{args.scheduler or 'a local cluster'}" + (f", dashboard {link}" if link else ""), flush=True)
             run["dashboard"] = link
             futures = _submit(client, to_run, start, threads)
-            _collect(futures, start, by_key, args, manifest, subjects, run, out_dir)
+            _collect(client, futures, start, by_out, args, manifest, subjects, run, out_dir)
         finally:
             client.close()
             if cluster:
                 cluster.close()
+        store.sweep(out_dir)  # every task has ended: what is left half-written belonged to lost workers
     run["finished"], run["seconds"] = _now(), round(time.monotonic() - t0, 3)
     posed = sum(r["ran"] == "this" and r["status"] == "done" and r["kind"] != "prepare" for r in start)
     run["poses_done"] = posed
@@ -183,18 +196,23 @@ def _run(args, manifest, subjects, tasks, out_dir, executable):
     return start, run
 
 
-def _collect(futures, start, by_key, args, manifest, subjects, run, out_dir):
+def _collect(client, futures, start, by_out, args, manifest, subjects, run, out_dir):
     from distributed import as_completed
     progress = Progress(len(futures))
     last_write = 0.0
+    workers = set(client.scheduler_info()["workers"])
     for future in as_completed(futures):
         t = futures[future]
+        now = set(client.scheduler_info()["workers"])
+        for lost in sorted(workers - now):
+            progress.note(f"batch: worker {lost} left the cluster; Dask runs its tasks again on the others")
+        workers = now
         try:
             result = future.result()
         except Exception as e:  # noqa: BLE001 - a worker lost too often (KilledWorker), a lost connection
             result = {"status": "failed", "message": f"{type(e).__name__}: {' '.join(str(e).split())}"}
         record = {**_describe(t), **result, "ran": "this"}
-        start[by_key[t["key"]]] = record
+        start[by_out[t["out"]]] = record
         if record["status"] != "done":
             progress.note(f"batch: failed: {t['subject']} {t['task']}: {record['message']}")
         progress.update(record["status"])

@@ -32,6 +32,16 @@ def publish(staging, final_dir, record):
         shutil.rmtree(old, ignore_errors=True)
 
 
+def sweep(root):
+    """Removes the hidden staging folders under `root` (left by workers killed mid-task); call it only
+    when no task writing under `root` is running."""
+    for folder, subfolders, _files in os.walk(root):
+        for name in list(subfolders):
+            if name.startswith(".") and ".part-" in name:
+                shutil.rmtree(os.path.join(folder, name), ignore_errors=True)
+                subfolders.remove(name)
+
+
 def discard(staging):
     shutil.rmtree(staging, ignore_errors=True)
 

@@ -47,14 +47,24 @@ def prepare_command(task, out):
     return cmd
 
 
+def _die_with_worker():
+    """In the prepare's child: killed when its worker dies (Linux), rather than left preparing alone."""
+    import ctypes
+    import signal
+    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
 def prepare_subject(task):
     """`repose prepare` of one subject into its case folder (the command's own checks, label table
     and automatic rig apply); the folder is renamed into place with its record when complete."""
+    done = store.completed(task["out"], task["key"])
+    if done:  # Dask runs it again when the worker holding its result was lost: keep the case others read
+        return done
     t0, record = time.perf_counter(), _record(task)
     staging = store.staging_dir(task["out"])
     try:
         cmd = prepare_command(task, staging)
-        p = subprocess.run(cmd, capture_output=True, text=True)
+        p = subprocess.run(cmd, capture_output=True, text=True, preexec_fn=_die_with_worker)
         with open(os.path.join(staging, "prepare.log"), "w") as f:
             f.write(" ".join(cmd) + "\n" + p.stdout + p.stderr)
         if p.returncode != 0:
@@ -73,10 +83,11 @@ def _poser(task):
     """The worker thread's CasePoser for the task's case, loaded once (and its figures' rest data)."""
     from .metrics import RestFigures
     from .posing import CasePoser
-    wanted = (task["case"], task["case_key"], task["image"])
+    image = task["image"] if "image" in task["outputs"] else None
+    wanted = (task["case"], task["case_key"], image)
     if getattr(_local, "key", None) != wanted:
         _local.key, _local.poser = None, None  # free the previous case first
-        poser = CasePoser(task["case"], task["image"])
+        poser = CasePoser(task["case"], image)
         poser.figures = RestFigures(poser.rest_mesh, poser.rest_labels, poser.skeleton_json)
         _local.poser, _local.key = poser, wanted
     return _local.poser
@@ -92,6 +103,9 @@ def _set_threads(count):
 
 def pose_task(prepared, task):
     """Poses one pose file (kind "pose") or BVH frame (kind "frame") of a prepared subject."""
+    done = store.completed(task["out"], task["key"])
+    if done:  # run again after a lost worker: its result is already in place
+        return done
     t0, record = time.perf_counter(), _record(task)
     if prepared["status"] != "done":
         record["message"] = f"subject {task['subject']} was not prepared: {prepared['message']}"
