@@ -143,8 +143,11 @@ const char* kDemoUsage =
     "  --no-render  skip render.png (it needs an X display; without one, repose runs itself under xvfb-run)\n";
 
 const char* kPhantomUsage =
-    "usage: repose phantom --out DIR [--size tiny|small|medium|large]\n"
-    "  Writes DIR/labels.nii.gz, DIR/skeleton.json and DIR/labels.tsv (label table).\n";
+    "usage: repose phantom --out DIR [--size tiny|small|medium|large] [--rest-pose apart|contact]\n"
+    "  Writes DIR/labels.nii.gz, DIR/skeleton.json and DIR/labels.tsv (label table).\n"
+    "  --rest-pose apart    arms and thighs clear of each other (default)\n"
+    "  --rest-pose contact  as real scans are taken: arms against the torso, hands against the thighs,\n"
+    "                       thighs touching, with no background between them\n";
 
 const char* kRigUsage =
     "usage: repose rig --labels FILE [--label-table FILE] --out skeleton.json [--max-gap MM]\n"
@@ -177,10 +180,15 @@ const char* kPrepareUsage =
     "                          the labels, else TotalSegmentator's names (see 'repose rig --help')\n"
     "  --image FILE            CT on the label grid: the body is the labels united with CT above the threshold\n"
     "  --body-threshold HU     default -500\n"
-    "  --mesh-spacing MM       mesh the body on this voxel size (default: the label spacing); coarser = fewer tets\n"
+    "  --max-tets N            tet budget (default 3000000, the paper's scale): the body is meshed on the finest\n"
+    "                          voxel size, not finer than the labels', whose mesh fits it; 0 = the label spacing\n"
+    "  --mesh-spacing MM       mesh the body on this voxel size instead (overrides --max-tets); coarser = fewer tets\n"
     "  --quality RATIO         TetGen radius-edge bound (default 2.0)\n"
     "  --influences K          bone weights kept per node (default 4)\n"
-    "  --surface-reduction F   fraction of surface triangles removed by decimation (default 0)\n";
+    "  --surface-reduction F   fraction of surface triangles removed by decimation (default 0)\n"
+    "  --contact-separation on|off  cut apart body parts that touch in the scan (an arm against the torso,\n"
+    "                          a hand against a thigh, the thighs) where their skins meet in a crease, so that\n"
+    "                          posing them apart leaves no tissue web (default on)\n";
 
 const char* kPoseUsage =
     "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
@@ -274,11 +282,14 @@ const char* kDemoPose = R"({
 }
 )";
 
-vtkSmartPointer<vtkReposePhantomSource> makePhantom(const std::string& size) {
+vtkSmartPointer<vtkReposePhantomSource> makePhantom(const std::string& size, const std::string& rest = "apart") {
   auto phantom = vtkSmartPointer<vtkReposePhantomSource>::New();
   if (size != "tiny" && size != "small" && size != "medium" && size != "large")
     throw UsageError("unknown --size '" + size + "' (use tiny, small, medium or large)");
+  if (rest != "apart" && rest != "contact")
+    throw UsageError("unknown --rest-pose '" + rest + "' (use apart or contact)");
   phantom->SetSizeName(size.c_str());
+  phantom->SetRestPoseName(rest.c_str());
   phantom->Update();
   if (!phantom->GetOutput() || !phantom->GetOutput()->GetPointData())
     throw std::runtime_error("phantom: cannot build the phantom");
@@ -288,7 +299,7 @@ vtkSmartPointer<vtkReposePhantomSource> makePhantom(const std::string& size) {
 int runPhantom(const Options& o) {
   if (o.help) return std::cout << kPhantomUsage, 0;
   const std::string outDir = o.require("out");
-  auto phantom = makePhantom(o.get("size", "small"));
+  auto phantom = makePhantom(o.get("size", "small"), o.get("rest-pose", "apart"));
   repose::AtomicOutputs out(outDir);
   repose::writeImage(phantom->GetOutput(), out.stage("labels.nii.gz"));
   repose::writeTextFile(out.stage("skeleton.json"), phantom->GetSkeletonJSON());
@@ -307,6 +318,8 @@ void prepareCase(repose::Pipeline& pipeline, vtkImageData* labels, const std::st
   repose::PrepareSettings s;
   s.bodyThreshold = o.number("body-threshold", s.bodyThreshold);
   s.meshSpacing = o.number("mesh-spacing", s.meshSpacing);
+  s.maxTets = o.number("max-tets", s.maxTets);
+  if (s.maxTets != 0 && s.maxTets < 1000) throw UsageError("--max-tets must be 0 (no budget) or at least 1000");
   s.radiusEdgeRatio = o.number("quality", s.radiusEdgeRatio);
   s.maxInfluences = static_cast<int>(o.number("influences", s.maxInfluences));
   s.surfaceReduction = o.number("surface-reduction", s.surfaceReduction);
@@ -314,6 +327,10 @@ void prepareCase(repose::Pipeline& pipeline, vtkImageData* labels, const std::st
   if (s.meshSpacing < 0) throw UsageError("--mesh-spacing must not be negative");
   if (s.radiusEdgeRatio < 1.1) throw UsageError("--quality must be at least 1.1 (TetGen does not terminate below)");
   if (s.surfaceReduction < 0 || s.surfaceReduction >= 1) throw UsageError("--surface-reduction must be in [0, 1)");
+  const std::string separation = o.get("contact-separation", "on");
+  if (separation != "on" && separation != "off")
+    throw UsageError("--contact-separation takes on or off, not '" + separation + "'");
+  s.separateContacts = separation == "on";
   pipeline.prepare(labels, labelsName, skeletonJson, skeletonName, image, imageName, s);
   pipeline.saveCase(caseDir, labelsExt);
   for (const auto& line : pipeline.reportLines()) std::cout << "  " << line << "\n";
@@ -980,11 +997,12 @@ int main(int argc, char** argv) {
     const std::set<std::string> none;
     if (command == "demo")
       return runDemo(Options(argc, argv, 2, {"out", "size", "skinning"}, {"no-render"}), argc, argv);
-    if (command == "phantom") return runPhantom(Options(argc, argv, 2, {"out", "size"}, none));
+    if (command == "phantom") return runPhantom(Options(argc, argv, 2, {"out", "size", "rest-pose"}, none));
     if (command == "prepare")
       return runPrepare(Options(argc, argv, 2,
                                 {"labels", "skeleton", "image", "out", "body-threshold", "mesh-spacing", "quality",
-                                 "influences", "surface-reduction", "label-table", "max-gap"},
+                                 "influences", "surface-reduction", "label-table", "max-gap", "contact-separation",
+                                 "max-tets"},
                                 none));
     if (command == "pose")
       return runPose(Options(argc, argv, 2,

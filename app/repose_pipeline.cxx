@@ -258,7 +258,10 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   mesher->SetSkeletonJSON(skeletonJson_.c_str());
   mesher->SetBodyThreshold(settings.bodyThreshold);
   mesher->SetMeshingSpacing(settings.meshSpacing);
+  mesher->SetMaxTets(static_cast<vtkIdType>(settings.maxTets));
   mesher->SetRadiusEdgeRatio(settings.radiusEdgeRatio);
+  for (int label : settings.skinLabels) mesher->AddSkinLabel(label);
+  mesher->SetSeparateContacts(settings.separateContacts);
   auto mesherErrors = captureErrors(mesher);
   mesher->Update();
   vtkUnstructuredGrid* mesh = mesher->GetOutput();
@@ -266,6 +269,13 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   timed("mesh", secondsSince(t0));
   report_.push_back("tet mesh: " + std::to_string(mesh->GetNumberOfPoints()) + " nodes, " +
                     std::to_string(mesh->GetNumberOfCells()) + " tets");
+  {
+    std::istringstream lines(mesher->GetReport());
+    for (std::string line; std::getline(lines, line);)
+      if (line.rfind("body mask", 0) == 0 || line.rfind("meshing grid", 0) == 0 || line.rfind("contact ", 0) == 0 ||
+          line.rfind("over the budget", 0) == 0)
+        report_.push_back(line);
+  }
 
   note("computing bone weights (Laplace, one factorization)");
   t0 = Clock::now();

@@ -30,10 +30,13 @@ struct DeformationStats;
 
 struct PrepareSettings {
   double bodyThreshold = -500.0;   ///< HU, with a CT image
-  double meshSpacing = 0.0;        ///< mm; 0 = the label volume's spacing
+  double meshSpacing = 0.0;        ///< mm; 0 = chosen from maxTets (the label spacing if it fits)
+  double maxTets = 3.0e6;          ///< tet budget when meshSpacing is 0 (0 = none: the label spacing)
   double radiusEdgeRatio = 2.0;    ///< TetGen quality bound
   int maxInfluences = 4;           ///< bone weights kept per node
   double surfaceReduction = 0.0;   ///< fraction of surface triangles removed by decimation
+  std::vector<int> skinLabels;     ///< removed before meshing (see vtkReposeBodyMesher::AddSkinLabel)
+  bool separateContacts = true;    ///< part body parts that touch in the scan
 };
 
 struct StageTime {

@@ -28,7 +28,8 @@
 #include <stdexcept>
 #include <sstream>
 
-#include "body_mask.h"
+#include "mesh_budget.h"
+#include "meshing_mask.h"
 #include "image_grid.h"
 #include "mesh_ordering.h"
 #include "mesh_tagging.h"
@@ -99,6 +100,9 @@ int vtkReposeBodyMesher::RequestData(
   const auto start = Clock::now();
   this->NumberOfNodes = this->NumberOfTets = this->NumberOfSurfaceTriangles = 0;
   this->NumberOfSeedPoints = this->NumberOfFixedNodes = this->NumberOfFreedContactNodes = 0;
+  this->NumberOfContactVoxelsCut = 0;
+  this->MeshingSpacingUsed = 0;
+  this->ContactReport.clear();
   this->TotalSeconds = this->TetGenSeconds = 0;
   this->Report.clear();
 
@@ -140,81 +144,130 @@ int vtkReposeBodyMesher::RequestData(
            << " joints" << (intensityImage ? ", with intensity image" : "") << " (" << SecondsSince(t)
            << " s)\n";
 
-    t = Clock::now();
-    repose::BodyMaskOptions maskOptions;
-    maskOptions.bodyThreshold = this->BodyThreshold;
-    repose::MaskVolume mask = repose::bodyMask(labels, intensityImage ? &intensity : nullptr, maskOptions);
-    std::size_t bodyVoxels = std::count(mask.data.begin(), mask.data.end(), 1);
-    std::size_t meshVoxels = bodyVoxels;
-    if (this->PeelOuterLayer)
-    {
-      mask = repose::peelOuterLayer(mask);
-      repose::keepBoneVoxels(mask, labels, boneOfLabel);
-      meshVoxels = std::count(mask.data.begin(), mask.data.end(), 1);
-      if (meshVoxels == 0)
-      {
-        vtkErrorMacro("the body is at most two voxels thick: nothing is left after peeling the outer "
-                      "layer; turn PeelOuterLayer off");
-        return 0;
-      }
-    }
-    report << "body mask: " << bodyVoxels << " voxels, " << meshVoxels << " after peeling ("
-           << SecondsSince(t) << " s)\n";
-
-    t = Clock::now();
-    const double minSpacing = labels.grid.spacing.minCoeff();
-    const double ratio = std::max(1.0, this->MeshingSpacing / minSpacing);
-    const int surfaceStep =
-      this->SeedSurfaceStep > 0 ? this->SeedSurfaceStep : std::max(2, int(std::lround(2 * ratio)));
-    const int interiorStep = this->SeedInteriorStep > 0 ? this->SeedInteriorStep : 2 * surfaceStep;
-    const repose::Points seeds = repose::boneSeedPoints(labels, boneOfLabel, mask, surfaceStep, interiorStep);
-    this->NumberOfSeedPoints = seeds.rows();
-    report << "bone seeds: " << seeds.rows() << " (steps " << surfaceStep << "/" << interiorStep
-           << " voxels, " << SecondsSince(t) << " s)\n";
-
-    vtkSmartPointer<vtkImageData> maskImage = repose_vtk::ToImage(mask);
+    repose::MeshingMaskOptions maskOptions;
+    maskOptions.body.bodyThreshold = this->BodyThreshold;
+    maskOptions.meshSpacingMm = this->MeshingSpacing;
+    maskOptions.maxTets = static_cast<double>(this->MaxTets);
+    maskOptions.skinLabels = this->SkinLabels;
+    maskOptions.peelOuterLayer = this->PeelOuterLayer;
+    maskOptions.separateContacts = this->SeparateContacts;
     repose::TetMeshingOptions meshOptions;
     meshOptions.radiusEdgeRatio = this->RadiusEdgeRatio;
     meshOptions.maxTetVolume = this->MaxTetVolume;
     repose::TetMeshingReport tetReport;
-    // Surface -> tets; a decimated surface may self-intersect in a narrow gap, then TetGen
-    // refuses it and the full-resolution surface is used instead.
-    auto meshSurface = [&](double reduction) {
-      auto ts = Clock::now();
-      vtkNew<vtkPolyData> surface;
-      if (!vtkReposeSurfaceExtractor::ContourMask(
-            maskImage, this->MeshingSpacing, this->SurfaceSmoothingIterations, 0.1, reduction, surface))
+    repose::MeshingMask meshing;
+
+    // Body on the meshing grid -> surface -> tets.
+    auto meshBody = [&]() {
+      t = Clock::now();
+      meshing = repose::meshingMask(labels, intensityImage ? &intensity : nullptr, boneOfLabel, skeleton, maskOptions);
+      this->MeshingSpacingUsed = meshing.spacing.spacingMm;
+      this->NumberOfContactVoxelsCut = static_cast<vtkIdType>(meshing.contacts.voxelsCut);
+      this->ContactReport = meshing.contacts.text(skeleton);
+      const auto& mg = meshing.mesh.body.grid;
+      report << "body mask: " << meshing.bodyVoxels << " voxels";
+      if (meshing.closedMm > 0)
       {
-        throw std::invalid_argument("no body surface could be extracted (MeshingSpacing too coarse for the body?)");
+        report << " (the labels alone make the body: closed by " << meshing.closedMm << " mm)";
       }
-      repose::Points V;
-      repose::Triangles F;
-      if (!ToTriangles(surface, V, F))
+      report << ", " << meshing.components.kept << " piece(s) with bone";
+      if (meshing.components.bridged > 0)
       {
-        throw std::invalid_argument("the body surface has non-triangle cells");
+        report << ", " << meshing.components.bridged << " without bone bridged to them ("
+               << meshing.components.bridgeVoxels << " bridge voxels)";
       }
-      this->NumberOfSurfaceTriangles = F.rows();
-      report << "surface: " << V.rows() << " points, " << F.rows() << " triangles (reduction " << reduction
-             << ", " << SecondsSince(ts) << " s)\n";
-      return repose::tetrahedralizeSurface(V, F, seeds, meshOptions, &tetReport);
+      if (meshing.components.dropped > 0)
+      {
+        report << ", " << meshing.components.dropped << " dropped (" << meshing.components.droppedVoxels
+               << " voxels: no bone and too small or too far to bridge)";
+      }
+      report << "; " << meshing.peeledVoxels << " after "
+             << (maskOptions.skinLabels.empty() ? "peeling the outer layer"
+                                                : "removing " + std::to_string(meshing.skinVoxelsRemoved) +
+                                                    " skin voxels")
+             << "\nmeshing grid: " << mg.dims[0] << "x" << mg.dims[1] << "x" << mg.dims[2] << " at "
+             << meshing.spacing.spacingMm << " mm";
+      if (meshing.spacing.trials > 0)
+      {
+        report << " (chosen for at most " << this->MaxTets << " tets: " << meshing.spacing.surfaceFaces
+               << " surface faces, " << meshing.spacing.seeds << " bone seeds, about "
+               << std::lround(meshing.spacing.predictedTets) << " tets; " << meshing.spacing.trials << " trials)";
+      }
+      report << ", " << meshing.meshVoxels << " voxels, " << meshing.contacts.contacts.size()
+             << " contact(s) separated, " << meshing.contacts.voxelsCut << " voxels cut (" << SecondsSince(t)
+             << " s)\n"
+             << this->ContactReport;
+
+      t = Clock::now();
+      repose::SeedSteps steps = repose::seedSteps(labels.grid, meshing.spacing.spacingMm);
+      if (this->SeedSurfaceStep > 0)
+      {
+        steps.surface = this->SeedSurfaceStep;
+        steps.interior = 2 * steps.surface;
+      }
+      if (this->SeedInteriorStep > 0)
+      {
+        steps.interior = this->SeedInteriorStep;
+      }
+      const repose::Points seeds =
+        repose::boneSeedPoints(labels, boneOfLabel, meshing.peeled, steps.surface, steps.interior);
+      this->NumberOfSeedPoints = seeds.rows();
+      report << "bone seeds: " << seeds.rows() << " (steps " << steps.surface << "/" << steps.interior
+             << " voxels, " << SecondsSince(t) << " s)\n";
+
+      vtkSmartPointer<vtkImageData> maskImage = repose_vtk::ToImage(meshing.mesh.body);
+      // Surface -> tets; a decimated surface may self-intersect in a narrow gap, then TetGen
+      // refuses it and the full-resolution surface is used instead.
+      auto meshSurface = [&](double reduction) {
+        auto ts = Clock::now();
+        vtkNew<vtkPolyData> surface;
+        if (!vtkReposeSurfaceExtractor::ContourMask(
+              maskImage, 0, this->SurfaceSmoothingIterations, 0.1, reduction, surface))
+        {
+          throw std::invalid_argument("no body surface could be extracted (MeshingSpacing too coarse for the body?)");
+        }
+        repose::Points V;
+        repose::Triangles F;
+        if (!ToTriangles(surface, V, F))
+        {
+          throw std::invalid_argument("the body surface has non-triangle cells");
+        }
+        this->NumberOfSurfaceTriangles = F.rows();
+        report << "surface: " << V.rows() << " points, " << F.rows() << " triangles (reduction " << reduction
+               << ", " << SecondsSince(ts) << " s)\n";
+        return repose::tetrahedralizeSurface(V, F, seeds, meshOptions, &tetReport);
+      };
+      try
+      {
+        return meshSurface(this->SurfaceReduction);
+      }
+      catch (const std::invalid_argument& e)
+      {
+        if (this->SurfaceReduction <= 0)
+        {
+          throw;
+        }
+        report << "decimated surface rejected (" << e.what() << "); meshing the full surface\n";
+        return meshSurface(0.0);
+      }
     };
-    repose::TetMesh mesh;
-    try
-    {
-      mesh = meshSurface(this->SurfaceReduction);
-    }
-    catch (const std::invalid_argument& e)
-    {
-      if (this->SurfaceReduction <= 0)
-      {
-        throw;
-      }
-      report << "decimated surface rejected (" << e.what() << "); meshing the full surface\n";
-      mesh = meshSurface(0.0);
-    }
-    this->TetGenSeconds = tetReport.seconds;
+    repose::TetMesh mesh = meshBody();
     report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
            << " s)\n";
+    this->TetGenSeconds = tetReport.seconds;
+    // The budget's prediction is a fit: where TetGen exceeds the budget by a tenth, choose again
+    // with the tets per surface point this body has shown, and mesh once more.
+    if (meshing.spacing.trials > 0 && tetReport.tets > 1.1 * static_cast<double>(this->MaxTets))
+    {
+      maskOptions.tetsPerPoint =
+        1.02 * tetReport.tets / static_cast<double>(meshing.spacing.surfaceFaces + meshing.spacing.seeds);
+      report << "over the budget of " << this->MaxTets << " tets (" << maskOptions.tetsPerPoint
+             << " tets per surface point): meshing again\n";
+      mesh = meshBody();
+      report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
+             << " s)\n";
+      this->TetGenSeconds += tetReport.seconds;
+    }
 
     t = Clock::now();
     repose::reorderMeshSpatially(mesh);
@@ -318,7 +371,16 @@ void vtkReposeBodyMesher::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SkeletonJSON: " << (this->SkeletonJSON.empty() ? "(empty)" : "(set)") << "\n";
   os << indent << "BodyThreshold: " << this->BodyThreshold << "\n";
   os << indent << "PeelOuterLayer: " << this->PeelOuterLayer << "\n";
+  os << indent << "SeparateContacts: " << this->SeparateContacts << "\n";
+  os << indent << "SkinLabels:";
+  for (int label : this->SkinLabels)
+  {
+    os << " " << label;
+  }
+  os << "\n";
   os << indent << "MeshingSpacing: " << this->MeshingSpacing << "\n";
+  os << indent << "MaxTets: " << this->MaxTets << "\n";
+  os << indent << "MeshingSpacingUsed: " << this->MeshingSpacingUsed << "\n";
   os << indent << "RadiusEdgeRatio: " << this->RadiusEdgeRatio << "\n";
   os << indent << "MaxTetVolume: " << this->MaxTetVolume << "\n";
   os << indent << "SurfaceSmoothingIterations: " << this->SurfaceSmoothingIterations << "\n";

@@ -18,6 +18,7 @@
 #include "vtkUnstructuredGridAlgorithm.h"
 
 #include <string>
+#include <vector>
 
 class vtkAlgorithmOutput;
 class vtkImageData;
@@ -37,16 +38,37 @@ public:
   vtkSetMacro(BodyThreshold, double);
   vtkGetMacro(BodyThreshold, double);
 
-  /// Remove the outer voxel layer of the body mask before meshing (default on).
+  /// Remove the outer voxel layer of the body mask before meshing (default on). Ignored when skin
+  /// labels are given: the skin is removed instead.
   vtkSetMacro(PeelOuterLayer, bool);
   vtkGetMacro(PeelOuterLayer, bool);
   vtkBooleanMacro(PeelOuterLayer, bool);
 
-  /// Spacing (mm) of the lattice the surface is extracted on; 0 (default) = the image spacing.
-  /// Coarser values give fewer tets (the main size control). Gaps between body parts narrower
-  /// than about this spacing may be welded.
+  /// Labels of the skin: removed before meshing (as the paper does), so skins touching in the scan
+  /// part. None by default.
+  void AddSkinLabel(int label) { this->SkinLabels.push_back(label), this->Modified(); }
+  void RemoveAllSkinLabels() { this->SkinLabels.clear(), this->Modified(); }
+  int GetNumberOfSkinLabels() { return static_cast<int>(this->SkinLabels.size()); }
+
+  /// Cut apart the parts that touch in the scan (an arm against the torso, a hand against a thigh,
+  /// the thighs) where their skins meet in a crease, so posing them apart leaves no tissue web
+  /// (default on; see separateContacts in contact_separation.h).
+  vtkSetMacro(SeparateContacts, bool);
+  vtkGetMacro(SeparateContacts, bool);
+  vtkBooleanMacro(SeparateContacts, bool);
+
+  /// Spacing (mm) of the lattice the surface is extracted on; 0 (default) = chosen from MaxTets, or
+  /// the image spacing without a budget. Coarser values give fewer tets.
   vtkSetClampMacro(MeshingSpacing, double, 0.0, 1000.0);
   vtkGetMacro(MeshingSpacing, double);
+
+  /// Tet budget (0 = none, the default): with MeshingSpacing 0, the finest meshing spacing whose
+  /// predicted tet count fits it is used (see chooseMeshSpacing in mesh_budget.h), and the mesh is
+  /// made once more, coarser, if TetGen exceeds it by a fifth.
+  vtkSetClampMacro(MaxTets, vtkIdType, 0, VTK_ID_MAX);
+  vtkGetMacro(MaxTets, vtkIdType);
+  /// The meshing spacing of the last run (mm).
+  vtkGetMacro(MeshingSpacingUsed, double);
 
   /// TetGen quality bound (radius-edge ratio, > 1; default 2.0, TetGen's own; 1.6 gives ~35 % more tets at ~4x the time) and maximum tet volume (mm^3, 0 = none).
   vtkSetClampMacro(RadiusEdgeRatio, double, 1.05, 100.0);
@@ -84,6 +106,9 @@ public:
   vtkGetMacro(NumberOfFreedContactNodes, vtkIdType);
   vtkGetMacro(TotalSeconds, double);
   vtkGetMacro(TetGenSeconds, double);
+  /// Body voxels (of the meshing grid) removed to part touching body parts, and one line per contact.
+  vtkGetMacro(NumberOfContactVoxelsCut, vtkIdType);
+  const char* GetContactReport() { return this->ContactReport.c_str(); }
   /// Multi-line text report of the last run (counts and timings per stage).
   const char* GetReport() { return this->Report.c_str(); }
 
@@ -97,7 +122,11 @@ protected:
   std::string SkeletonJSON;
   double BodyThreshold = -500.0;
   bool PeelOuterLayer = true;
+  bool SeparateContacts = true;
+  std::vector<int> SkinLabels;
   double MeshingSpacing = 0.0;
+  vtkIdType MaxTets = 0;
+  double MeshingSpacingUsed = 0.0;
   double RadiusEdgeRatio = 2.0;
   double MaxTetVolume = 0.0;
   int SurfaceSmoothingIterations = 10;
@@ -113,6 +142,8 @@ protected:
   vtkIdType NumberOfFreedContactNodes = 0;
   double TotalSeconds = 0;
   double TetGenSeconds = 0;
+  vtkIdType NumberOfContactVoxelsCut = 0;
+  std::string ContactReport;
   std::string Report;
 
 private:

@@ -37,6 +37,12 @@ repose::PhantomSize ToCore(int size)
   }
 }
 
+repose::PhantomRestPose ToCoreRestPose(int rest)
+{
+  return rest == vtkReposePhantomSource::CONTACT ? repose::PhantomRestPose::Contact
+                                                 : repose::PhantomRestPose::Apart;
+}
+
 }
 
 vtkReposePhantomSource::vtkReposePhantomSource()
@@ -63,11 +69,28 @@ const char* vtkReposePhantomSource::GetSizeName()
   return names[std::clamp(this->Size, static_cast<int>(TINY), static_cast<int>(LARGE))];
 }
 
+void vtkReposePhantomSource::SetRestPoseName(const char* name)
+{
+  try
+  {
+    this->SetRestPose(static_cast<int>(repose::parsePhantomRestPose(name ? name : "")));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+  }
+}
+
+const char* vtkReposePhantomSource::GetRestPoseName()
+{
+  return this->RestPose == CONTACT ? "contact" : "apart";
+}
+
 const char* vtkReposePhantomSource::GetSkeletonJSON()
 {
   try
   {
-    this->SkeletonJSON = repose::skeletonToJson(repose::describePhantom(ToCore(this->Size)).skeleton);
+    this->SkeletonJSON = repose::skeletonToJson(repose::describePhantom(ToCore(this->Size), ToCoreRestPose(this->RestPose)).skeleton);
   }
   catch (const std::exception& e)
   {
@@ -79,7 +102,7 @@ const char* vtkReposePhantomSource::GetSkeletonJSON()
 
 const char* vtkReposePhantomSource::GetLabelTableTSV()
 {
-  const repose::Phantom ph = repose::describePhantom(ToCore(this->Size));
+  const repose::Phantom ph = repose::describePhantom(ToCore(this->Size), ToCoreRestPose(this->RestPose));
   std::set<int> bones;
   for (const repose::Joint& joint : ph.skeleton.joints)
   {
@@ -101,7 +124,7 @@ int vtkReposePhantomSource::RequestInformation(
 {
   try
   {
-    repose_vtk::SetOutputGeometry(repose::describePhantom(ToCore(this->Size)).labels.grid,
+    repose_vtk::SetOutputGeometry(repose::describePhantom(ToCore(this->Size), ToCoreRestPose(this->RestPose)).labels.grid,
       outputVector->GetInformationObject(0), VTK_INT);
   }
   catch (const std::exception& e)
@@ -124,7 +147,7 @@ int vtkReposePhantomSource::RequestData(
   }
   try
   {
-    const repose::Phantom ph = repose::makePhantom(ToCore(this->Size));
+    const repose::Phantom ph = repose::makePhantom(ToCore(this->Size), ToCoreRestPose(this->RestPose));
     const repose::ImageGrid& grid = ph.labels.grid;
     output->Initialize();
     output->SetExtent(0, grid.dims[0] - 1, 0, grid.dims[1] - 1, 0, grid.dims[2] - 1);
@@ -151,4 +174,5 @@ void vtkReposePhantomSource::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "Size: " << this->GetSizeName() << " (" << this->Size << ")\n";
+  os << indent << "RestPose: " << this->GetRestPoseName() << "\n";
 }

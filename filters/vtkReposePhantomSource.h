@@ -34,6 +34,21 @@ public:
   void SetSizeName(const char* name);
   const char* GetSizeName();
 
+  /// Rest pose of the scan: APART (arms and thighs clear of each other, the default) or CONTACT
+  /// (arms against the torso, hands against the thighs, thighs touching, welded in the voxels).
+  enum
+  {
+    APART = 0,
+    CONTACT = 1
+  };
+  vtkSetClampMacro(RestPose, int, APART, CONTACT);
+  vtkGetMacro(RestPose, int);
+  void SetRestPoseToApart() { this->SetRestPose(APART); }
+  void SetRestPoseToContact() { this->SetRestPose(CONTACT); }
+  /// "apart" | "contact"; anything else is an error and keeps the current rest pose.
+  void SetRestPoseName(const char* name);
+  const char* GetRestPoseName();
+
   /// The skeleton of the current size as skeleton.json text (true joint centres, mm, LPS).
   const char* GetSkeletonJSON();
   /// Label table: a header line "value\tname\tkind", then one line per label (kind: bone | soft).
@@ -47,6 +62,7 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   int Size = TINY;
+  int RestPose = APART;
   std::string SkeletonJSON;
   std::string LabelTableTSV;
 

@@ -538,3 +538,62 @@ TEST(MeshTagging, NoEdgeJoinsTwoBonesAfterFreeingContacts) {
   untagged.tets = T;
   EXPECT_THROW(freeBoneContacts(untagged), std::invalid_argument);
 }
+
+TEST(BodyMask, EveryPosablePieceIsKeptAndLabelledPiecesAreBridged) {
+  // A body with a bone, an "eye" labelled 3 voxels away from it, a 2-voxel speck, and a piece of CT
+  // with no label (a table's leg).
+  const ImageGrid g = makeGrid(40, 20, 20);
+  LabelVolume labels = makeLabels(g);
+  MaskVolume mask;
+  mask.grid = g;
+  mask.data.assign(g.voxelCount(), 0);
+  for (int k = 2; k < 18; ++k)
+    for (int j = 2; j < 18; ++j)
+      for (int i = 2; i < 15; ++i) {
+        mask.at(i, j, k) = 1;
+        labels.at(i, j, k) = (i > 6 && i < 10 && j > 6 && j < 12) ? 2 : 1;  // soft tissue around a bone
+      }
+  for (int k = 8; k < 12; ++k)
+    for (int j = 8; j < 12; ++j)
+      for (int i = 18; i < 22; ++i) mask.at(i, j, k) = 1, labels.at(i, j, k) = 5;  // the eye
+  mask.at(30, 3, 3) = mask.at(31, 3, 3) = 1, labels.at(30, 3, 3) = labels.at(31, 3, 3) = 5;  // a speck
+  for (int k = 2; k < 8; ++k)
+    for (int j = 12; j < 18; ++j)
+      for (int i = 30; i < 36; ++i) mask.at(i, j, k) = 1;  // unlabelled
+  const PosableComponentsReport r = keepPosableComponents(mask, labels, {-1, -1, 0, -1, -1, -1});
+  EXPECT_EQ(r.kept, 1);
+  EXPECT_EQ(r.bridged, 1);
+  EXPECT_EQ(r.dropped, 2);
+  EXPECT_EQ(r.droppedVoxels, 2u + 216u);
+  EXPECT_GT(r.bridgeVoxels, 0u);
+  EXPECT_EQ(mask.at(20, 10, 10), 1);  // the eye stays, joined to the body across the gap:
+  std::vector<std::uint8_t> seen(mask.data.size(), 0);
+  std::vector<std::size_t> stack{g.linearIndex(20, 10, 10)};
+  seen[stack[0]] = 1;
+  while (!stack.empty()) {
+    const std::size_t v = stack.back();
+    stack.pop_back();
+    const int i = int(v % 40), j = int((v / 40) % 20), k = int(v / 800);
+    const int n[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+    for (const auto& q : n)
+      if (g.contains(q[0], q[1], q[2]) && mask.at(q[0], q[1], q[2]) && !seen[g.linearIndex(q[0], q[1], q[2])])
+        seen[g.linearIndex(q[0], q[1], q[2])] = 1, stack.push_back(g.linearIndex(q[0], q[1], q[2]));
+  }
+  EXPECT_TRUE(seen[g.linearIndex(8, 8, 8)]);
+  EXPECT_EQ(mask.at(30, 3, 3), 0);
+  EXPECT_EQ(mask.at(32, 14, 4), 0);
+  // The labels alone leave gaps when no label makes half of their outside.
+  EXPECT_FALSE(labelsLeaveGaps(labels));  // soft tissue (1) makes most
+  LabelVolume organs = makeLabels(g);
+  for (int k = 0; k < 3; ++k) organs.at(k * 10, 5, 5) = organs.at(k * 10 + 1, 5, 5) = 3 + k;  // three organs
+  EXPECT_TRUE(labelsLeaveGaps(organs));
+  // A thin skin around many tissues, none of them half the body: the skin makes the outside.
+  LabelVolume skinned = makeLabels(g);
+  for (int k = 2; k < 18; ++k)
+    for (int j = 2; j < 18; ++j)
+      for (int i = 2; i < 38; ++i) {
+        const bool shell = k == 2 || k == 17 || j == 2 || j == 17 || i == 2 || i == 37;
+        skinned.at(i, j, k) = shell ? 1 : 2 + i / 6;  // 1 = skin, six tissues inside
+      }
+  EXPECT_FALSE(labelsLeaveGaps(skinned));
+}

@@ -250,6 +250,39 @@ TEST(Phantom, ArmsAndThighsAreSeparatedByBackground) {
   }
 }
 
+TEST(Phantom, ContactRestPoseWeldsArmsHandsAndThighs) {
+  // As real scans are taken: the same body and skeleton names, but no background between the arms
+  // and the torso, the hands and the thighs, or the two thighs, where the apart pose has some.
+  const Phantom ph = makePhantom(PhantomSize::Small, PhantomRestPose::Contact);
+  const LabelVolume& v = ph.labels;
+  const Skeleton& s = ph.skeleton;
+  ASSERT_EQ(s.joints.size(), tiny().skeleton.joints.size());
+  for (std::size_t j = 0; j < s.joints.size(); ++j) EXPECT_EQ(s.joints[j].name, tiny().skeleton.joints[j].name);
+  const auto sliceOf = [&](const Eigen::Vector3d& x) { return int(std::lround(v.grid.physicalToIndex(x).z())); };
+  const auto centre = [&](const char* name) { return s.joints[jointIndex(s, name)].center; };
+  // Upper arms and torso are one part below the armpit: 3 parts apart, 1 in contact.
+  const int kMidArm = sliceOf(0.5 * (centre("left_shoulder") + centre("left_elbow")));
+  EXPECT_EQ(sliceComponents(v, kMidArm), 1);
+  // The thighs touch from 12 cm below the hips to the knees: no background on the midline between them.
+  for (int k = sliceOf(centre("left_knee") + Eigen::Vector3d(0, 0, 40));
+       k <= sliceOf(centre("left_hip") - Eigen::Vector3d(0, 0, 120)); ++k) {
+    const Eigen::Vector3d ijk = v.grid.physicalToIndex(Eigen::Vector3d(0, centre("left_hip").y(), 0));
+    EXPECT_NE(v.at(int(std::lround(ijk.x())), int(std::lround(ijk.y())), k), pl::Background) << "slice " << k;
+  }
+  // The hands lie against the thighs: one part where the apart pose has four.
+  EXPECT_EQ(sliceComponents(v, sliceOf(centre("left_wrist") - Eigen::Vector3d(0, 0, 60))), 1);
+  // Every bone is present, inside the body, and the skin is the outer layer only (no skin where
+  // two parts are welded).
+  std::set<int> present(v.data.begin(), v.data.end());
+  for (const Joint& j : s.joints)
+    for (int label : j.labels) EXPECT_TRUE(present.count(label)) << j.name;
+  const Phantom apart = makePhantom(PhantomSize::Small);
+  const auto count = [](const LabelVolume& l, int label) { return std::count(l.data.begin(), l.data.end(), label); };
+  EXPECT_LT(count(v, pl::Skin), count(apart.labels, pl::Skin));
+  EXPECT_EQ(parsePhantomRestPose("contact"), PhantomRestPose::Contact);
+  EXPECT_THROW(parsePhantomRestPose("lying"), std::invalid_argument);
+}
+
 TEST(Phantom, SkeletonMatchesTheBones) {
   const Phantom& ph = tiny();
   const Skeleton& s = ph.skeleton;

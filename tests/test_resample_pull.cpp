@@ -504,6 +504,60 @@ TEST(ResamplePull, RestCoverageKeepsExtensionsOutOfNeighbourInteriors) {
   EXPECT_THROW(repose::resampleLabelsPull(L, V, P, T, g, opt, 0), std::invalid_argument);
 }
 
+TEST(ResamplePull, RestDistanceGivesEachSideOfACutItsOwnHalf) {
+  // A "hand" B pressed against a "thigh" A, their tissue welded at rest (labels 3 | 7 7 7 7 | 5: the
+  // cut of four voxels between the meshes is tissue 7), then moved apart by 12 voxels. Each mesh's
+  // extrapolation may take back its own side of the cut; without the rest distances both take it
+  // all and the cut's tissue is doubled.
+  ImageGrid g;
+  g.dims = {48, 8, 8};
+  repose::LabelVolume L;
+  L.grid = g;
+  L.data.assign(g.voxelCount(), 0);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < 48; ++i) L.at(i, j, k) = i <= 10 ? 3 : i <= 14 ? 7 : i <= 30 ? 5 : 0;
+  Points VA, VB;
+  Tets TA, TB;
+  boxMesh(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(10.5, 6, 6), {4, 3, 3}, VA, TA);
+  boxMesh(Eigen::Vector3d(14.5, 1, 1), Eigen::Vector3d(29, 6, 6), {6, 3, 3}, VB, TB);
+  Points V(VA.rows() + VB.rows(), 3);
+  V << VA, VB;
+  Tets T(TA.rows() + TB.rows(), 4);
+  T << TA, (TB.array() + int(VA.rows())).matrix();
+  Points P = V;
+  P.bottomRows(VB.rows()).col(0).array() += 12.0;
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  const repose::MaskVolume C = repose::restMeshCoverage(g, V, T);
+  const repose::MaskVolume D = repose::restMeshDistance(C);
+  EXPECT_EQ(D.at(5, 3, 3), 0);    // covered
+  EXPECT_EQ(D.at(11, 3, 3), 4);   // one voxel from A's last covered voxel (10), in quarters
+  EXPECT_EQ(D.at(12, 3, 3), 8);   // two from A's and from B's first (15)
+  EXPECT_EQ(D.at(14, 3, 3), 4);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;
+  opt.extrapolationDistance = 5.0;  // reaches across the whole cut
+  opt.restCoverage = &C;
+  auto layer = [&](const repose::LabelVolume& O) {
+    std::size_t n = 0;
+    for (int i = 0; i < 48; ++i) n += O.at(i, 3, 3) == 7;
+    return n;
+  };
+  const repose::LabelVolume both = repose::resampleLabelsPull(L, V, P, T, g, opt, 0);
+  opt.restDistance = &D;
+  const repose::LabelVolume own = repose::resampleLabelsPull(L, V, P, T, g, opt, 0);
+  EXPECT_GT(layer(both), 5u);  // the doubled cut: A's and B's copies
+  EXPECT_EQ(layer(own), 4u);   // two voxels each side, as at rest
+  for (int i = 11; i <= 12; ++i) EXPECT_EQ(own.at(i, 3, 3), 7) << i;   // A's half, in place
+  for (int i = 25; i <= 26; ++i) EXPECT_EQ(own.at(i, 3, 3), 7) << i;   // B's half, moved with B
+  EXPECT_EQ(own.at(13, 3, 3), 0);
+  EXPECT_EQ(own.at(24, 3, 3), 0);
+  repose::MaskVolume wrong = D;
+  wrong.data.pop_back();
+  opt.restDistance = &wrong;
+  EXPECT_THROW(repose::resampleLabelsPull(L, V, P, T, g, opt, 0), std::invalid_argument);
+}
+
 TEST(ResamplePull, SubExtentEqualsThatPartOfTheFullResample) {
   // Rigidly moved peeled mesh with extrapolation and rest coverage, so the sub-extent must reproduce
   // the extension's clean-up (dropped fragments, filled pinholes) at its borders too.

@@ -37,6 +37,7 @@ struct vtkReposePosedVolume::Internals
   vtkIdType NumberOfCells = -1;
   // Rest-grid voxels inside the rest mesh, and the rest points and grid it was computed for.
   std::unique_ptr<repose::MaskVolume> Coverage;
+  std::unique_ptr<repose::MaskVolume> Distance;  // restMeshDistance(Coverage)
   vtkMTimeType CoverageTime = 0;
   // Rest tets (same key as the boundary, plus the cell types).
   repose::Tets Tets;
@@ -390,9 +391,11 @@ int vtkReposePosedVolume::RequestData(
       if (!in.Coverage || in.CoverageTime != coverageTime || !in.Coverage->grid.sameGridAs(rest))
       {
         in.Coverage.reset(new repose::MaskVolume(repose::restMeshCoverage(rest, restNodes, tets)));
+        in.Distance.reset(new repose::MaskVolume(repose::restMeshDistance(*in.Coverage)));
         in.CoverageTime = coverageTime;
       }
       options.restCoverage = in.Coverage.get();
+      options.restDistance = in.Distance.get();
     }
     repose::PullResampleReport report;
     vtkSmartPointer<vtkDataArray> outScalars;

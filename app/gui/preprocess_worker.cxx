@@ -150,13 +150,9 @@ void PreprocessWorker::open() {
   if (save) {
     stage("saving the prepared case");
     const std::string dir = request_.saveCaseDir.toStdString();
+    // The case keeps its label names as labels.tsv (findCaseLabelTable reads them back).
+    if (!result_.table.labels.empty()) pipeline->setLabelTableTsv(labelTableToTsv(result_.table));
     pipeline->saveCase(dir, labelsExt);
-    // The case keeps its label names (findCaseLabelTable reads them back).
-    if (!result_.table.labels.empty() && !QFileInfo::exists(QDir(request_.saveCaseDir).filePath("labels.tsv"))) {
-      AtomicOutputs out(dir);
-      writeTextFile(out.stage("labels.tsv"), labelTableToTsv(result_.table));
-      out.commit();
-    }
   }
   if (cancelled_) throw Cancelled();
   pipeline->setProgress(nullptr);

@@ -1,10 +1,13 @@
 #include "body_mask.h"
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
+#include <unordered_map>
 #include <stdexcept>
 #include <string>
 
+#include "distance_transform.h"
 #include "parallel_for.h"
 
 namespace repose {
@@ -137,7 +140,165 @@ void fillHoles3d(std::vector<std::uint8_t>& v, const std::array<int, 3>& d) {
   for (auto& x : v) x = (x == kOutside) ? 0 : 1;
 }
 
+// Opening of the CT part by a ball of radius r (mm) keeps the body and drops what is thinner than
+// 2r (the table's shell, a cushion, cables); the largest piece of the opened mask and the labels is
+// then grown back by r within the original mask, so the body's own surface is unchanged.
+void removeThinStructures(MaskVolume& mask, const LabelVolume& labels, double r) {
+  const std::size_t n = mask.data.size();
+  MaskVolume outside = mask;
+  for (auto& x : outside.data) x = x ? 0 : 1;
+  const std::vector<float> toOutside = distanceToFeatures(outside);
+  MaskVolume core = mask;  // eroded
+  for (std::size_t p = 0; p < n; ++p) core.data[p] = toOutside[p] > r ? 1 : 0;
+  const std::vector<float> toCore = distanceToFeatures(core);
+  MaskVolume opened = mask;
+  for (std::size_t p = 0; p < n; ++p) opened.data[p] = (toCore[p] <= r && mask.data[p]) || labels.data[p] != 0;
+  keepLargestComponent(opened.data, opened.grid.dims);
+  const std::vector<float> toOpened = distanceToFeatures(opened);
+  const double grow = r + opened.grid.spacing.maxCoeff();
+  for (std::size_t p = 0; p < n; ++p)
+    mask.data[p] = (mask.data[p] && toOpened[p] <= grow) || labels.data[p] != 0 ? 1 : 0;
+}
+
+// Morphological closing by a ball of radius r (mm): dilation, then erosion, by distance transforms.
+void close(MaskVolume& mask, double r) {
+  const std::vector<float> toBody = distanceToFeatures(mask);
+  MaskVolume outsideDilated = mask;
+  for (std::size_t p = 0; p < mask.data.size(); ++p) outsideDilated.data[p] = toBody[p] > r ? 1 : 0;
+  const std::vector<float> toOutside = distanceToFeatures(outsideDilated);
+  for (std::size_t p = 0; p < mask.data.size(); ++p)
+    mask.data[p] = mask.data[p] || toOutside[p] > r ? 1 : 0;
+}
+
 }  // namespace
+
+bool labelsLeaveGaps(const LabelVolume& labels) {
+  // The labels of the labelled voxels on the outside of the labelled region (a face on unlabelled).
+  const ImageGrid& g = labels.grid;
+  const auto& d = g.dims;
+  std::unordered_map<std::int32_t, std::size_t> count;
+  std::size_t outer = 0;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i) {
+        const std::int32_t v = labels.at(i, j, k);
+        if (v == 0) continue;
+        const int n[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+        for (const auto& q : n)
+          if (g.contains(q[0], q[1], q[2]) && labels.at(q[0], q[1], q[2]) == 0) {
+            ++count[v], ++outer;
+            break;
+          }
+      }
+  std::size_t largest = 0;
+  for (const auto& [v, c] : count) largest = std::max(largest, c);
+  return outer > 0 && 2 * largest < outer;
+}
+
+PosableComponentsReport keepPosableComponents(MaskVolume& mask, const LabelVolume& labels,
+                                              const std::vector<int>& boneOfLabel, std::size_t minVoxels,
+                                              double maxBridgeMm) {
+  checkVolume("posable components: mask", mask.grid, mask.data.size());
+  if (!mask.grid.sameGridAs(labels.grid) || labels.data.size() != mask.data.size())
+    throw std::invalid_argument("posable components: the mask and the labels are on different grids");
+  const ImageGrid& g = mask.grid;
+  const std::size_t n = mask.data.size();
+  const auto& d = g.dims;
+  auto isBone = [&](std::size_t p) {
+    const std::int32_t l = labels.data[p];
+    return l >= 0 && std::size_t(l) < boneOfLabel.size() && boneOfLabel[l] >= 0;
+  };
+  // Components (6-connected), and whether each holds bone.
+  std::vector<std::int32_t> comp(n, -1);
+  std::vector<std::size_t> size;
+  std::vector<char> hasBone, hasLabel;
+  std::deque<std::size_t> queue;
+  const std::size_t sy = std::size_t(d[0]), sz = sy * d[1];
+  for (std::size_t s = 0; s < n; ++s) {
+    if (!mask.data[s] || comp[s] >= 0) continue;
+    const std::int32_t c = std::int32_t(size.size());
+    size.push_back(0), hasBone.push_back(0), hasLabel.push_back(0);
+    comp[s] = c;
+    queue.push_back(s);
+    while (!queue.empty()) {
+      const std::size_t p = queue.front();
+      queue.pop_front();
+      ++size[c];
+      hasBone[c] = hasBone[c] || isBone(p);
+      hasLabel[c] = hasLabel[c] || labels.data[p] != 0;
+      const int i = int(p % sy), j = int((p / sy) % d[1]), k = int(p / sz);
+      const std::size_t nb[6] = {p - 1, p + 1, p - sy, p + sy, p - sz, p + sz};
+      const bool ok[6] = {i > 0, i + 1 < d[0], j > 0, j + 1 < d[1], k > 0, k + 1 < d[2]};
+      for (int q = 0; q < 6; ++q)
+        if (ok[q] && mask.data[nb[q]] && comp[nb[q]] < 0) comp[nb[q]] = c, queue.push_back(nb[q]);
+    }
+  }
+  PosableComponentsReport report;
+  for (std::size_t c = 0; c < size.size(); ++c) report.kept += hasBone[c] ? 1 : 0;
+  if (report.kept == 0) return report;  // nothing to bridge to: leave the mask for the caller's checks
+  // Each component without bone, largest first: the shortest path through the background to a kept
+  // voxel (a breadth-first search over 26-neighbours, bounded by maxBridgeMm), then three voxels thick.
+  std::vector<std::size_t> order;
+  for (std::size_t c = 0; c < size.size(); ++c)
+    if (!hasBone[c]) order.push_back(c);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return size[a] > size[b]; });
+  const int maxSteps = int(std::ceil(maxBridgeMm / g.spacing.minCoeff()));
+  std::unordered_map<std::int32_t, std::vector<std::size_t>> voxelsOf;  // components without bone
+  for (std::size_t p = 0; p < n; ++p)
+    if (comp[p] >= 0 && !hasBone[comp[p]]) voxelsOf[comp[p]].push_back(p);
+  for (std::size_t c : order) {
+    const std::vector<std::size_t>& own = voxelsOf[std::int32_t(c)];
+    bool joined = false;
+    if (size[c] >= minVoxels && hasLabel[c]) {
+      std::unordered_map<std::size_t, std::size_t> from;  // background voxel -> the voxel it was reached from
+      std::vector<std::size_t> frontier(own), next;
+      std::size_t reached = n, reachedFrom = n;
+      for (int step = 0; step < maxSteps && !frontier.empty() && reached == n; ++step) {
+        next.clear();
+        for (std::size_t p : frontier) {
+          const int i = int(p % sy), j = int((p / sy) % d[1]), k = int(p / sz);
+          for (int dk = -1; dk <= 1 && reached == n; ++dk)
+            for (int dj = -1; dj <= 1 && reached == n; ++dj)
+              for (int di = -1; di <= 1 && reached == n; ++di) {
+                if (!g.contains(i + di, j + dj, k + dk)) continue;
+                const std::size_t q = g.linearIndex(i + di, j + dj, k + dk);
+                if (mask.data[q]) {
+                  if (comp[q] >= 0 && hasBone[comp[q]]) reached = q, reachedFrom = p;
+                } else if (from.emplace(q, p).second) {
+                  next.push_back(q);
+                }
+              }
+        }
+        frontier.swap(next);
+      }
+      if (reached != n) {
+        // Back from the kept voxel to the component, through background voxels, three voxels thick.
+        for (std::size_t p = reachedFrom; !mask.data[p] || comp[p] != std::int32_t(c);) {
+          const int i = int(p % sy), j = int((p / sy) % d[1]), k = int(p / sz);
+          for (int dk = -1; dk <= 1; ++dk)
+            for (int dj = -1; dj <= 1; ++dj)
+              for (int di = -1; di <= 1; ++di)
+                if (g.contains(i + di, j + dj, k + dk)) {
+                  const std::size_t q = g.linearIndex(i + di, j + dj, k + dk);
+                  if (!mask.data[q]) mask.data[q] = 1, ++report.bridgeVoxels;
+                }
+          const auto it = from.find(p);
+          if (it == from.end()) break;
+          p = it->second;
+        }
+        hasBone[c] = 1;  // now part of a posable piece: later components may bridge to it
+        joined = true;
+        ++report.bridged;
+      }
+    }
+    if (!joined) {
+      for (std::size_t p : own) mask.data[p] = 0;
+      ++report.dropped;
+      report.droppedVoxels += size[c];
+    }
+  }
+  return report;
+}
 
 MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, const BodyMaskOptions& options) {
   checkVolume("body mask: label volume", labels.grid, labels.data.size());
@@ -156,6 +317,8 @@ MaskVolume bodyMask(const LabelVolume& labels, const IntensityVolume* image, con
     for (std::size_t p = b; p < e; ++p)
       mask.data[p] = (labels.data[p] != 0 || (image && image->data[p] > threshold)) ? 1 : 0;
   }, 1 << 16);
+  if (image && options.thinStructureMm > 0) removeThinStructures(mask, labels, options.thinStructureMm);
+  if (options.closingMm > 0) close(mask, options.closingMm);
 
   const auto& d = mask.grid.dims;
   if (options.keepLargestComponent) keepLargestComponent(mask.data, d);

@@ -18,6 +18,12 @@ PhantomSize parsePhantomSize(const std::string& name) {
                               "': use one of tiny, small, medium, large");
 }
 
+PhantomRestPose parsePhantomRestPose(const std::string& name) {
+  if (name == "apart") return PhantomRestPose::Apart;
+  if (name == "contact") return PhantomRestPose::Contact;
+  throw std::invalid_argument("unknown phantom rest pose '" + name + "': use apart or contact");
+}
+
 namespace {
 
 using V3 = Eigen::Vector3d;
@@ -59,9 +65,11 @@ struct Prim {
         const double dz = p.z() - a.z();
         return std::max((std::hypot(dr / ra, dz / rb) - 1) * std::min(ra, rb), p.y() - ymax);
       }
-      case Kind::EllipticCylinder: {
-        const double k = std::hypot((p.x() - a.x()) / r.x(), (p.y() - a.y()) / r.y());
-        return std::max({(k - 1) * std::min(r.x(), r.y()), zmin - p.z(), p.z() - zmax});
+      case Kind::EllipticCylinder: {  // semi-axes r at zmin, rin at zmax (equal: a cylinder)
+        const double t = std::clamp((p.z() - zmin) / (zmax - zmin), 0.0, 1.0);
+        const double ax = r.x() + (rin.x() - r.x()) * t, by = r.y() + (rin.y() - r.y()) * t;
+        const double k = std::hypot((p.x() - a.x()) / ax, (p.y() - a.y()) / by);
+        return std::max({(k - 1) * std::min(ax, by), zmin - p.z(), p.z() - zmax});
       }
     }
     return 1e30;
@@ -94,8 +102,8 @@ Prim finish(Prim p) {
       p.hi.y() = std::min(p.hi.y(), p.ymax);
       break;
     case Kind::EllipticCylinder:
-      p.lo = V3(p.a.x() - p.r.x(), p.a.y() - p.r.y(), p.zmin);
-      p.hi = V3(p.a.x() + p.r.x(), p.a.y() + p.r.y(), p.zmax);
+      p.lo = V3(p.a.x() - std::max(p.r.x(), p.rin.x()), p.a.y() - std::max(p.r.y(), p.rin.y()), p.zmin);
+      p.hi = V3(p.a.x() + std::max(p.r.x(), p.rin.x()), p.a.y() + std::max(p.r.y(), p.rin.y()), p.zmax);
       break;
   }
   return p;
@@ -118,8 +126,10 @@ Prim ring(const V3& c, double ar, double br, double radial, double vertical, dou
   Prim p; p.kind = Kind::Ring; p.a = c; p.r = V3(ar, br, 0); p.ra = radial; p.rb = vertical; p.ymax = ymax;
   return finish(p);
 }
-Prim ellipticCylinder(double cx, double cy, double ax, double by, double z0, double z1) {
-  Prim p; p.kind = Kind::EllipticCylinder; p.a = V3(cx, cy, 0); p.r = V3(ax, by, 1); p.zmin = z0; p.zmax = z1;
+/// Semi-axes (ax0, by) at z0 widening linearly to (ax1, by) at z1.
+Prim ellipticCylinder(double cx, double cy, double ax0, double ax1, double by, double z0, double z1) {
+  Prim p; p.kind = Kind::EllipticCylinder; p.a = V3(cx, cy, 0); p.r = V3(ax0, by, 1); p.rin = V3(ax1, by, 1);
+  p.zmin = z0; p.zmax = z1;
   return finish(p);
 }
 
@@ -235,11 +245,16 @@ constexpr double kElbowWedge = 15 * 3.14159265358979323846 / 180;
 // physical frame is shifted down by kSole so the origin is not zero.
 constexpr double kSole = -880.0;
 
-Model buildModel(PhantomSize size) {
+// Contact rest pose: surfaces that touch overlap by this much (mm), so no voxel centre of
+// background lies between them at any size.
+constexpr double kContactOverlap = 2.0;
+
+Model buildModel(PhantomSize size, PhantomRestPose rest) {
   Model m;
   const V3 s = spacingOf(size);
+  const bool contact = rest == PhantomRestPose::Contact;
   m.gap = 1.05 * s.norm();
-  m.softGap = 1.05 * s.norm();
+  m.softGap = contact ? -kContactOverlap : 1.05 * s.norm();
   m.fat = std::max(12.0, 2 * s.maxCoeff());  // at least a voxel of fat under the skin
   const double g = m.gap;
   auto P = [](double x, double y, double z) { return V3(x, y, z + kSole); };
@@ -252,15 +267,40 @@ Model buildModel(PhantomSize size) {
   const double kneeR = 52;
   // Thighs converge toward the knees with their inner surfaces softGap apart all the way down.
   const double legX = m.softGap / 2 + thighR, kneeX = m.softGap / 2 + kneeR;
-  m.body.add(ellipticCylinder(0, 0, torsoA, torsoB, 860 + kSole, 1360 + kSole));
+  // Apart, the torso is a straight elliptic cylinder and the arm hangs straight beside it. In contact
+  // the torso narrows to a waist (as people do), the upper arm lies along its side, the forearm
+  // passes the hip touching it, and the hand turns in against the thigh; each contact overlaps by
+  // kContactOverlap, so the tissues are welded in the voxels.
+  const double waistA = contact ? 140 : torsoA;  // torso half-width at z = 860 (up to torsoA at 1360)
+  auto torsoHalfWidth = [&](double z) { return waistA + (torsoA - waistA) * (z - 860) / (1360 - 860); };
+  auto armRadius = [&](double z) { return armR + (30 - armR) * (1390 - z) / (1390 - 800); };
+  auto thighOuter = [&](double z) {
+    const double t = (930 - z) / (930 - 490);  // along the thigh cone, hip end to knee end
+    return legX + t * (kneeX - legX) + thighR + t * (kneeR - thighR);
+  };
+  const double elbowZ = 1100, wristZ = 840, handZ = 745, handHalfWidth = 26;
+  double elbowX = armX, wristX = armX, handX = armX;
+  if (contact) {
+    elbowX = torsoHalfWidth(elbowZ) - kContactOverlap + armRadius(elbowZ);
+    const double passZ = 930;  // the forearm touches the hip where the thigh is widest
+    const double passX = thighOuter(passZ) - kContactOverlap + armRadius(passZ);
+    wristX = elbowX + (passX - elbowX) * (elbowZ - wristZ) / (elbowZ - passZ);
+    handX = thighOuter(handZ) + handHalfWidth - kContactOverlap;
+  }
+  m.body.add(ellipticCylinder(0, 0, waistA, torsoA, torsoB, 860 + kSole, 1360 + kSole));
   m.body.add(ellipsoid(P(0, 0, 1360), V3(torsoA, torsoB, 70)));
-  m.body.add(ellipsoid(P(0, 0, 860), V3(torsoA, torsoB, 30)));
+  m.body.add(ellipsoid(P(0, 0, 860), V3(waistA, torsoB, 30)));
   m.body.add(capsule(P(-(armX - 10), 0, 1390), P(armX - 10, 0, 1390), 58));  // shoulders
   m.body.add(capsule(P(0, 10, 1380), P(0, 10, 1570), 52));                    // neck
   m.body.add(ellipsoid(P(0, 0, 1645), V3(80, 100, 105)));                     // head
   for (double side : {1.0, -1.0}) {
-    m.body.add(cone(P(side * armX, 0, 1390), armR, P(side * armX, 3, 800), 30));
-    m.body.add(ellipsoid(P(side * armX, 0, 745), V3(26, 48, 100)));            // hand
+    if (contact) {  // upper arm, forearm: the straight arm's radii at the elbow and the wrist
+      m.body.add(cone(P(side * armX, 0, 1390), armR, P(side * elbowX, 2, elbowZ), armRadius(elbowZ)));
+      m.body.add(cone(P(side * elbowX, 2, elbowZ), armRadius(elbowZ), P(side * wristX, 3, wristZ), armRadius(wristZ)));
+    } else {
+      m.body.add(cone(P(side * armX, 0, 1390), armR, P(side * armX, 3, 800), 30));
+    }
+    m.body.add(ellipsoid(P(side * handX, 0, handZ), V3(handHalfWidth, 48, 100)));  // hand
     m.body.add(cone(P(side * legX, 0, 930), thighR, P(side * kneeX, 5, 490), kneeR));
     m.body.add(cone(P(side * kneeX, 5, 490), kneeR, P(side * kneeX, 10, 85), 36));
     m.body.add(ellipsoid(P(side * kneeX, -45, 45), V3(44, 128, 45)));           // foot
@@ -393,26 +433,30 @@ Model buildModel(PhantomSize size) {
     const std::string pre = left ? "left_" : "right_";
     const int humerus = left ? HumerusLeft : HumerusRight, forearm = left ? ForearmLeft : ForearmRight;
     const int hand = left ? HandLeft : HandRight;
-    const double x = side * armX;
     const V3 shoulder = left ? shoulderL : shoulderR;
-    const V3 elbow = P(x, 5, 1100), wrist = P(x, 5, 840);
+    const V3 elbow = P(side * elbowX, 5, elbowZ), wrist = P(side * wristX, 5, wristZ);
+    const V3 up = (elbow - wrist).normalized();  // the forearm's axis, toward the elbow
+    // The upper arm's axis toward the shoulder and the hand's away from the wrist: straight up and
+    // down when the arm hangs straight, along the limb when it follows the body.
+    const V3 humerusUp = contact ? V3((shoulder - elbow).normalized()) : V3::UnitZ();
+    const V3 handDown = contact ? V3((P(side * handX, 0, handZ) - wrist).normalized()) : V3(-up);
     {
       Bone& b = bone(humerus);
-      const V3 condyle = elbow + V3(0, 0, g / 2 + 12);
+      const V3 condyle = elbow + (g / 2 + 12) * humerusUp;
       b.shape.add(sphere(shoulder, headR));
       b.shape.add(capsule(shoulder, condyle, 12));
       b.shape.add(ellipsoid(condyle, V3(26, 15, 12)));
-      b.wedges.push_back({elbow, V3::Zero(), V3::UnitZ(), kElbowWedge, 50, g / 2});
+      b.wedges.push_back({elbow, V3::Zero(), humerusUp, kElbowWedge, 50, g / 2});
     }
     {
       Bone& b = bone(forearm);
-      b.shape.add(capsule(elbow - V3(0, 0, g / 2 + 13), wrist + V3(0, 0, g / 2 + 13), 13));
-      b.wedges.push_back({elbow, V3::Zero(), -V3::UnitZ(), kElbowWedge, 50, g / 2});
+      b.shape.add(capsule(elbow - (g / 2 + 13) * up, wrist + (g / 2 + 13) * up, 13));
+      b.wedges.push_back({elbow, V3::Zero(), -up, kElbowWedge, 50, g / 2});
       rules.push_back({forearm, humerus});
     }
     {
       Bone& b = bone(hand);
-      b.shape.add(ellipsoid(wrist + V3(0, -5, -(g / 2 + 72)), V3(10, 28, 72)));
+      b.shape.add(ellipsoid(wrist + V3(0, -5, 0) + (g / 2 + 72) * handDown, V3(10, 28, 72)));
       rules.push_back({hand, forearm});
     }
     joint(pre + "shoulder", "spine", shoulder, {humerus});
@@ -486,8 +530,8 @@ std::vector<int> activeAt(std::size_t n, double z, F box) {
 
 }  // namespace
 
-Phantom describePhantom(PhantomSize size) {
-  Model m = buildModel(size);
+Phantom describePhantom(PhantomSize size, PhantomRestPose rest) {
+  Model m = buildModel(size, rest);
   Phantom ph;
   ph.labels.grid = m.grid;
   ph.skeleton = m.skeleton;
@@ -495,8 +539,8 @@ Phantom describePhantom(PhantomSize size) {
   return ph;
 }
 
-Phantom makePhantom(PhantomSize size) {
-  const Model m = buildModel(size);
+Phantom makePhantom(PhantomSize size, PhantomRestPose rest) {
+  const Model m = buildModel(size, rest);
   const ImageGrid& grid = m.grid;
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   auto point = [&](int i, int j, int k) { return grid.indexToPhysical(V3(i, j, k)); };

@@ -13,6 +13,14 @@ enum class PhantomSize { Tiny, Small, Medium, Large };
 /// "tiny" | "small" | "medium" | "large"; throws std::invalid_argument otherwise.
 PhantomSize parsePhantomSize(const std::string& name);
 
+/// How the phantom lies in its scan. Apart: arms and thighs clear of each other by a background
+/// gap. Contact: as real scans are taken, the arms rest against the torso, the hands against the
+/// thighs and the thighs touch from the crotch to the knees, with no background between them (the
+/// tissues are welded in the voxels, as in a CT).
+enum class PhantomRestPose { Apart, Contact };
+/// "apart" | "contact"; throws std::invalid_argument otherwise.
+PhantomRestPose parsePhantomRestPose(const std::string& name);
+
 /// Label values of the phantom.
 namespace phantom_label {
 enum : int {
@@ -30,10 +38,10 @@ struct Phantom {
 };
 
 /// Builds the phantom. Non-zero origin, anisotropic spacing, LPS direction diag(-1,-1,1).
-Phantom makePhantom(PhantomSize size);
+Phantom makePhantom(PhantomSize size, PhantomRestPose rest = PhantomRestPose::Apart);
 
-/// Same grid, skeleton and label names as makePhantom(size) without voxelizing: labels.data is
+/// Same grid, skeleton and label names as makePhantom(size, rest) without voxelizing: labels.data is
 /// empty (cheap; for pipeline information passes).
-Phantom describePhantom(PhantomSize size);
+Phantom describePhantom(PhantomSize size, PhantomRestPose rest = PhantomRestPose::Apart);
 
 }  // namespace repose

@@ -10,34 +10,9 @@
 #include <utility>
 
 #include "parallel_for.h"
+#include "point_tet_distance.h"
 
 namespace repose {
-namespace {
-
-// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
-Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
-}  // namespace
-
 namespace {
 
 constexpr std::size_t kBlock = 1 << 15;  // fixed reduction blocks keep the grid deterministic
@@ -314,7 +289,7 @@ double TetLocator::distanceToTet(int t, const Eigen::Vector3d& p) const {
   static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   double best = std::numeric_limits<double>::infinity();
   for (const auto& f : faces) {
-    const Eigen::Vector3d q = closestOnTriangle(p, nodes_.row(tets_(t, f[0])).transpose(),
+    const Eigen::Vector3d q = closestPointOnTriangle(p, nodes_.row(tets_(t, f[0])).transpose(),
                                                 nodes_.row(tets_(t, f[1])).transpose(),
                                                 nodes_.row(tets_(t, f[2])).transpose());
     best = std::min(best, (q - p).squaredNorm());
@@ -379,7 +354,7 @@ TetLocator::Hit TetLocator::findNearest(const Eigen::Vector3d& p) const {
       for (int i = node.first; i < node.first + node.count; ++i) {
         const int f = faceOrder_[std::size_t(i)];
         const auto& v = faces_[std::size_t(f)];
-        const double fd2 = (closestOnTriangle(p, nodes_.row(v[0]).transpose(), nodes_.row(v[1]).transpose(),
+        const double fd2 = (closestPointOnTriangle(p, nodes_.row(v[0]).transpose(), nodes_.row(v[1]).transpose(),
                                               nodes_.row(v[2]).transpose()) - p).squaredNorm();
         if (fd2 < best2 || (fd2 == best2 && f < bestFace)) {
           best2 = fd2;

@@ -1,5 +1,7 @@
 #include "resample_pull.h"
 
+#include "distance_transform.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <utility>
@@ -14,6 +16,7 @@
 #include <vector>
 
 #include "parallel_for.h"
+#include "point_tet_distance.h"
 #include "tet_boundary.h"
 
 namespace repose {
@@ -49,6 +52,10 @@ void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& res
     throw std::invalid_argument("pull resample: non-finite node coordinates");
   if (!std::isfinite(options.extrapolationDistance))
     throw std::invalid_argument("pull resample: extrapolation distance must be finite");
+  if (options.restDistance && (options.restDistance->grid.dims != restGrid.dims ||
+                               options.restDistance->data.size() != restGrid.voxelCount()))
+    throw std::invalid_argument("pull resample: rest mesh distance does not match the rest grid; compute it with "
+                                "restMeshDistance(restMeshCoverage(rest grid, restNodes, tets))");
   if (options.restCoverage && (options.restCoverage->grid.dims != restGrid.dims ||
                                options.restCoverage->data.size() != restGrid.voxelCount()))
     throw std::invalid_argument("pull resample: rest coverage mask does not match the rest grid; compute it with "
@@ -362,15 +369,35 @@ inline void restStart(const TetSetup& s, int i0, int j, const double* rk, double
 
 // Kernels turn a run of voxels (i0..i1, j) of a tet into samples: push(i - i0, value).
 //   cover(s, i0, i1, j, rk, push)     pass 1: every voxel of the run
-//   extendAt(r, distance, value)      extrapolation: the value at rest index r of a voxel `distance` mm
+//   extendAt(r, distance, restDistanceToTet, value)
+//                                     extrapolation: the value at rest index r of a voxel `distance` mm
 //                                     outside the tet it is extrapolated from; false = not written
+// Whether an extrapolation `distance` mm outside its tet may sample rest voxel n: inside another part
+// of the mesh only near the tet's face; outside the mesh only if the tet is about as near as the
+// nearest part of the mesh (restDistance, see restMeshDistance).
+struct RestOwnership {
+  const std::uint8_t* restCovered;   // may be null
+  const std::uint8_t* restDistance;  // may be null
+  double nearFace;                   // mm outside its tet within which covered voxels may be sampled
+  double unit;                       // mm per step of restDistance
+  // `distance`: how far outside its posed tet the voxel lies; restDistanceToTet(): how far its rest
+  // point lies from the rest tet (computed only where it is needed).
+  template <class RestDistance>
+  bool allows(std::size_t n, double distance, RestDistance&& restDistanceToTet) const {
+    if (restCovered && restCovered[n] && distance > nearFace) return false;  // another part's interior
+    if (restDistance && restDistance[n] > 0 && restDistance[n] < 255 &&
+        restDistanceToTet() > (restDistance[n] + 1) * unit)
+      return false;  // nearer to another part of the mesh: that part's to take back
+    return true;
+  }
+};
+
 struct LabelKernel {
   using Value = std::int32_t;
   const std::int32_t* src;
   int dx, dy, dz;
   std::int32_t background;
-  const std::uint8_t* restCovered;  // may be null
-  double nearFace;                  // mm outside its tet within which an extrapolation may sample covered voxels
+  RestOwnership owner;
 
   // Nearest voxel: the one whose footprint [c-0.5, c+0.5) holds the rest point. With r shifted by +0.5
   // the index is the truncation, and the rest index steps by a constant vector along the row.
@@ -392,12 +419,13 @@ struct LabelKernel {
         push(i - i0, inside(r) ? src[index(r)] : background);
     }
   }
-  bool extendAt(const double r0[3], double distance, std::int32_t& value) const {
+  template <class RestDistance>
+  bool extendAt(const double r0[3], double distance, RestDistance&& restDistanceToTet, std::int32_t& value) const {
     const double r[3] = {r0[0] + 0.5, r0[1] + 0.5, r0[2] + 0.5};
     if (!inside(r)) return false;
     const std::size_t n = index(r);
     if (src[n] == background) return false;  // never paint background: another tet may reach it
-    if (restCovered && restCovered[n] && distance > nearFace) return false;  // another part's interior
+    if (!owner.allows(n, distance, restDistanceToTet)) return false;
     value = src[n];
     return true;
   }
@@ -408,8 +436,7 @@ struct IntensityKernel {
   const float* src;
   int dx, dy, dz;
   float background;
-  const std::uint8_t* restCovered;  // may be null
-  double nearFace;                  // mm outside its tet within which an extrapolation may sample covered voxels
+  RestOwnership owner;
 
   bool inside(const double r[3]) const {
     return r[0] >= -0.5 && r[1] >= -0.5 && r[2] >= -0.5 && r[0] < dx - 0.5 && r[1] < dy - 0.5 && r[2] < dz - 0.5;
@@ -445,12 +472,13 @@ struct IntensityKernel {
     for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
       push(i - i0, s.restInside || inside(r) ? sample(r) : background);
   }
-  bool extendAt(const double r[3], double distance, float& value) const {
+  template <class RestDistance>
+  bool extendAt(const double r[3], double distance, RestDistance&& restDistanceToTet, float& value) const {
     if (!inside(r)) return false;
-    if (restCovered) {
+    if (owner.restCovered || owner.restDistance) {
       const std::size_t n = (std::size_t(int(r[2] + 0.5)) * std::size_t(dy) + std::size_t(int(r[1] + 0.5))) *
                                 std::size_t(dx) + std::size_t(int(r[0] + 0.5));
-      if (restCovered[n] && distance > nearFace) return false;
+      if (!owner.allows(n, distance, restDistanceToTet)) return false;
     }
     value = sample(r);
     return true;
@@ -464,7 +492,8 @@ struct CoverageKernel {
   void cover(const TetSetup&, int i0, int i1, int, const double*, Push&& push) const {
     for (int i = i0; i <= i1; ++i) push(i - i0, std::uint8_t(1));
   }
-  bool extendAt(const double*, double, std::uint8_t&) const { return false; }
+  template <class RestDistance>
+  bool extendAt(const double*, double, RestDistance&&, std::uint8_t&) const { return false; }
 };
 
 // First and last non-empty mark of a row ([n, -1] if none), by 8-byte words.
@@ -620,6 +649,7 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
   // Orientation in index space flips with a left-handed direction matrix.
   const double orient = outGrid.direction.determinant() < 0 ? -1.0 : 1.0;
   const Eigen::Vector3d invSpacing = outGrid.spacing.cwiseInverse();
+  const Eigen::Vector3d restSpacing = restGrid.spacing;
 
   // 1. Samples per chunk of tets and z-range.
   const int nRanges = std::min(nz, 16);
@@ -819,7 +849,13 @@ void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Poin
             T value;
             if (!tetExtension(P, R, tets, t, x, invSpacing, orient, dist, r) || !(dist <= best)) continue;
             if (dist == best && bestTet[q] != std::numeric_limits<std::uint32_t>::max()) continue;
-            if (!kernel.extendAt(r, dist, value)) continue;
+            auto restDistanceToTet = [&] {
+              Eigen::Vector3d v[4];
+              for (int a = 0; a < 4; ++a)
+                for (int m = 0; m < 3; ++m) v[a][m] = double(R[std::size_t(tets(t, a)) * 3 + m]) * restSpacing[m];
+              return pointTetDistance(Eigen::Vector3d(r[0], r[1], r[2]).cwiseProduct(restSpacing), v[0], v[1], v[2], v[3]);
+            };
+            if (!kernel.extendAt(r, dist, restDistanceToTet, value)) continue;
             best = dist;
             bestTet[q] = t;
             bestValue[q] = value;
@@ -994,16 +1030,23 @@ Box voiOf(const ImageGrid& outGrid, const PullResampleOptions& options) {
   return Box(lo, hi);
 }
 
+RestOwnership restOwnership(const ImageGrid& rest, const PullResampleOptions& options) {
+  // With the distances known, a covered voxel is taken only within half a voxel of the tet's face
+  // (rounding), not a whole one: the other side of a cut contact is that far at most.
+  return RestOwnership{options.restCoverage ? options.restCoverage->data.data() : nullptr,
+                       options.restDistance ? options.restDistance->data.data() : nullptr,
+                       (options.restDistance ? 0.5 : 1.0) * rest.spacing.maxCoeff(),
+                       kRestDistanceUnit * rest.spacing.minCoeff()};
+}
+
 LabelKernel labelKernel(const LabelVolume& rest, const PullResampleOptions& options, std::int32_t background) {
   return LabelKernel{rest.data.data(), rest.grid.dims[0], rest.grid.dims[1], rest.grid.dims[2], background,
-                     options.restCoverage ? options.restCoverage->data.data() : nullptr,
-                     rest.grid.spacing.maxCoeff()};
+                     restOwnership(rest.grid, options)};
 }
 
 IntensityKernel intensityKernel(const IntensityVolume& rest, const PullResampleOptions& options, float background) {
   return IntensityKernel{rest.data.data(), rest.grid.dims[0], rest.grid.dims[1], rest.grid.dims[2], background,
-                         options.restCoverage ? options.restCoverage->data.data() : nullptr,
-                         rest.grid.spacing.maxCoeff()};
+                         restOwnership(rest.grid, options)};
 }
 
 float meanOf(const float* v, int n) {
@@ -1034,6 +1077,19 @@ MaskVolume restMeshCoverage(const ImageGrid& restGrid, const Points& restNodes, 
   resampleInto(restGrid, restNodes, restNodes, tets, restGrid, none, CoverageKernel{}, std::uint8_t(0),
                [](const std::uint8_t*, int) { return std::uint8_t(0); }, voiOf(restGrid, none), out.data.data(),
                nullptr, start);
+  return out;
+}
+
+MaskVolume restMeshDistance(const MaskVolume& coverage) {
+  if (coverage.data.size() != coverage.grid.voxelCount())
+    throw std::invalid_argument("rest mesh distance: the coverage does not match its grid");
+  const std::vector<float> mm = distanceToFeatures(coverage);
+  const double unit = kRestDistanceUnit * coverage.grid.spacing.minCoeff();
+  MaskVolume out;
+  out.grid = coverage.grid;
+  out.data.resize(mm.size());
+  for (std::size_t v = 0; v < mm.size(); ++v)
+    out.data[v] = std::uint8_t(std::min(255.0, std::ceil(double(mm[v]) / unit)));
   return out;
 }
 

@@ -38,6 +38,11 @@ struct PullResampleOptions {
   /// neighbouring part's interior (e.g. an arm resting against the torso, then raised), while points
   /// just outside the tet may still round to voxels just inside.
   const MaskVolume* restCoverage = nullptr;
+  /// Optional restMeshDistance(coverage): also, a rest voxel outside the mesh belongs to the part of
+  /// the mesh nearest it, and an extrapolation samples it only from a tet about that near (within a
+  /// quarter of the smallest spacing more). Where two parts touched at rest and were cut apart before
+  /// meshing (contact separation), each part so takes back its own side of the cut, not both.
+  const MaskVolume* restDistance = nullptr;
   /// Optional output sub-extent {i0, i1, j0, j1, k0, k1} (inclusive voxel indices of outGrid), e.g. the
   /// slices a viewer shows: only those voxels are produced, and they equal the same voxels of the full
   /// resample (the extrapolation looks a few voxels beyond the extent to ensure that). The
@@ -57,6 +62,12 @@ ImageGrid posedOutputGrid(const ImageGrid& rest, const Points& posedNodes, int p
 /// Rest-grid mask: 1 where the voxel centre lies in some rest tet. Depends on the rest mesh and grid
 /// only, so compute it once per rest mesh (it costs about one resampling pass).
 MaskVolume restMeshCoverage(const ImageGrid& restGrid, const Points& restNodes, const Tets& tets);
+
+/// Distance from every rest voxel to the rest mesh, for PullResampleOptions::restDistance: 0 where
+/// `coverage` (restMeshCoverage) is set, else the distance to the nearest covered voxel centre in
+/// units of kRestDistanceUnit x the grid's smallest spacing, rounded up, at most 255 (= far).
+constexpr double kRestDistanceUnit = 0.25;
+MaskVolume restMeshDistance(const MaskVolume& coverage);
 
 /// Labels: nearest rest voxel; voxels outside the posed mesh (and its extension) are `background`.
 /// restNodes/posedNodes #V by 3, tets #T by 4. Threaded with parallelFor; deterministic (a voxel
