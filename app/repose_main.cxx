@@ -33,6 +33,7 @@
 #include "vtkReposePhantomSource.h"
 
 #include "atomic_outputs.h"
+#include "batch_command.h"
 #include "deformation_stats.h"
 #include "fidelity_plot.h"
 #include "label_table.h"
@@ -128,7 +129,8 @@ const char* kMainUsage =
     "  pose      pose a prepared case: posed label volume, mesh and surfaces\n"
     "  animate   drive a prepared case with a BVH motion clip: a ParaView time series\n"
     "  rig       find the joints from the bone labels and write an editable skeleton.json\n"
-    "  voxelize  surface meshes (skin, bones, tissues) -> a label volume and its label table\n\n"
+    "  voxelize  surface meshes (skin, bones, tissues) -> a label volume and its label table\n"
+    "  batch     many subjects x poses and BVH frames from a manifest, on Dask (a local or a remote cluster)\n\n"
     "Run 'repose COMMAND --help' for the options of a command.\n";
 
 const char* kDemoUsage =
@@ -1112,6 +1114,7 @@ int main(int argc, char** argv) {
         throw UsageError(e.what());
       }
     }
+    if (command == "batch") repose::execBatchRunner(argc, argv, 2);  // the Python runner; returns only by throwing
     if (command == "rig") return runRig(Options(argc, argv, 2, {"labels", "label-table", "out", "max-gap"}, none));
     if (command == "animate")
       return runAnimate(Options(argc, argv, 2,

@@ -12,6 +12,8 @@ packages=(
   libsuitesparse-dev libopenblas0-pthread
   libgtest-dev googletest
   python3-numpy python3-scipy
+  python3-distributed python3-yaml  # repose batch: Dask's local and remote clusters, YAML manifests
+  python3-psutil  # the batch test finds and kills a Dask worker (also a dependency of python3-distributed)
   xvfb xauth
 )
 missing=()

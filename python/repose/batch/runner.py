@@ -1,0 +1,259 @@
+"""`repose batch MANIFEST --out DIR`: prepares every subject once, then fans its poses and clip frames
+out over a Dask cluster (a local one by default), skipping what is complete, and keeps the record."""
+import argparse
+import importlib.util
+import logging
+import os
+import shutil
+import sys
+import time
+import uuid
+from datetime import datetime, timezone
+
+from . import records, store
+from .manifest import ManifestError, load_manifest
+from .plan import file_hash, plan_batch
+from .progress import Progress, duration
+
+USAGE = """repose batch MANIFEST --out DIR [--workers N | --scheduler ADDRESS] [--retry-failed] [--dry-run]"""
+DESCRIPTION = """Many subjects x many poses and BVH frames, on Dask. MANIFEST (YAML or JSON, see docs/batch.md)
+names the subjects (labels, optional CT, skeleton or auto, label table) and what to make of each (poses,
+clips with frame ranges, skinning, relaxation, outputs, format). Each subject is prepared once
+(DIR/SUBJECT/case, as `repose prepare`), then every pose (DIR/SUBJECT/poses/POSE) and frame
+(DIR/SUBJECT/clips/CLIP/frame_NNNNN) is posed as `repose pose` poses it, on the cluster's workers.
+Results are written atomically; a rerun skips every result already complete for the same inputs and
+settings (and tasks that failed before, unless --retry-failed). DIR/batch.csv has one row per task
+(status, times, body volume ratio, worst bone Dice against its rigid motion, inverted tets);
+DIR/batch.json the exact inputs with their sha256, the settings and the versions. Exit status 1 when a
+task failed (its message is in both records)."""
+
+
+WORKER_WAIT_SECONDS = 60  # the workers of a cluster just started (Slurm, Kubernetes) come in after its scheduler
+
+
+class UsageError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise UsageError(message)
+
+
+def parse_args(argv):
+    p = _Parser(prog="repose batch", usage=USAGE, description=DESCRIPTION,
+                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("manifest", metavar="MANIFEST", help="the batch manifest (.yaml, .yml or .json)")
+    p.add_argument("--out", required=True, metavar="DIR", help="results and records (created if missing)")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="workers of the local cluster (default: one per core; each runs one task at a time)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="an existing Dask scheduler (tcp://host:8786) instead of a local cluster; its workers need "
+                        "this build at the same path, this package on PYTHONPATH and DIR on a shared file system")
+    p.add_argument("--retry-failed", action="store_true", help="run again the tasks that failed before")
+    p.add_argument("--dry-run", action="store_true", help="list what would run and what is complete, run nothing")
+    args = p.parse_args(argv)
+    if args.workers is not None and args.workers < 1:
+        raise UsageError("--workers must be at least 1")
+    if args.workers is not None and args.scheduler:
+        raise UsageError("--workers is for the local cluster; a --scheduler has its own workers")
+    return args
+
+
+def _now():
+    return datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+
+
+def _describe(task):
+    """The client's part of a task's record: what it is and its exact inputs."""
+    inputs = {"pose": task.get("pose"), "clip": task.get("clip"), "frame": task.get("frame"),
+              "retarget": task.get("retarget")}
+    return {"kind": task["kind"], "subject": task["subject"], "task": task["task"], "key": task["key"],
+            "out": task["out"], "inputs": {k: v for k, v in inputs.items() if v is not None}}
+
+
+def _triage(tasks, retry_failed, out_dir):
+    """Each task's starting record: complete results are skipped, earlier failures kept unless retried."""
+    failed_before = records.previous_failures(out_dir)
+    start, to_run = [], []
+    for t in tasks:
+        done = store.completed(t["out"], t["key"])
+        if done:
+            start.append({**done, **_describe(t), "status": "skipped", "ran": "earlier"})
+        elif t["key"] in failed_before and not retry_failed:
+            start.append({**failed_before[t["key"]], **_describe(t), "status": "failed", "ran": "earlier"})
+        else:
+            start.append({**_describe(t), "status": "not run", "ran": ""})
+            to_run.append(t)
+    return start, to_run
+
+
+def _connect(args):
+    """(client, cluster or None, threads per worker for the filters, dashboard link or "")."""
+    from distributed import Client, LocalCluster
+    if args.scheduler:
+        client = Client(args.scheduler, timeout="30s")
+        link = client.dashboard_link if "dashboard" in client.scheduler_info().get("services", {}) else ""
+        return client, None, 0, link
+    cores = os.cpu_count() or 1
+    workers = args.workers or cores
+    bokeh = importlib.util.find_spec("bokeh") is not None  # Dask's dashboard needs it (not in Debian 12)
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                           dashboard_address=":0" if bokeh else None, silence_logs=logging.CRITICAL)
+    client = Client(cluster)
+    return client, cluster, max(1, cores // workers), client.dashboard_link if bokeh else ""
+
+
+def _check_workers(client, executable):
+    """Every worker of an existing cluster must import this package and see this build."""
+    def probe(path=executable):
+        try:
+            import repose  # noqa: F401
+            from repose import vtkReposeSkeletonPoses  # noqa: F401
+        except ImportError as e:
+            return f"cannot import the repose package ({e}); start the worker with PYTHONPATH set to it"
+        return "" if os.access(path, os.X_OK) else f"{path}: not found on the worker (the same build is needed there)"
+
+    if not client.scheduler_info()["workers"]:
+        print(f"batch: waiting up to {WORKER_WAIT_SECONDS} s for a worker of {client.scheduler.address}", flush=True)
+        try:
+            client.wait_for_workers(1, timeout=WORKER_WAIT_SECONDS)
+        except Exception:  # noqa: BLE001 - Dask's TimeoutError (asyncio's or its own, by version)
+            raise RuntimeError(f"the scheduler {client.scheduler.address} has no workers "
+                               f"(none came in {WORKER_WAIT_SECONDS} s)") from None
+    answers = client.run(probe)
+    for worker, problem in sorted(answers.items()):
+        if problem:
+            raise RuntimeError(f"worker {worker}: {problem}")
+    return len(answers)
+
+
+def _submit(client, to_run, start, threads):
+    """Futures of the tasks to run: prepares first (higher priority), poses depending on theirs."""
+    from .tasks import pose_task, prepare_subject
+    run_id = uuid.uuid4().hex[:8]
+    # subject -> its prepare's future, or what an earlier run left: complete, or failed (not retried)
+    prepared = {r["subject"]: {"status": "done" if r["status"] == "skipped" else r["status"],
+                               "message": r.get("message", "")} for r in start if r["kind"] == "prepare"}
+    # One subject's poses before the next's: a worker then loads each case once, not at every switch.
+    # Dask groups tasks by their keys' words before the run id, so all poses are one group, ordered as one.
+    order = {name: i for i, name in enumerate(dict.fromkeys(r["subject"] for r in start))}
+    futures = {}
+    for t in to_run:
+        if t["kind"] == "prepare":
+            f = client.submit(prepare_subject, t, key=f"prepare-{run_id}-{t['subject']}", priority=10, pure=False)
+            prepared[t["subject"]] = f
+            futures[f] = t
+    for t in to_run:
+        if t["kind"] != "prepare":
+            f = client.submit(pose_task, prepared[t["subject"]], {**t, "threads": threads},
+                              key=f"{t['kind']}-{run_id}-{t['subject']}-{t['task']}",
+                              priority=-order[t["subject"]], pure=False)
+            futures[f] = t
+    return futures
+
+
+def _header(args, manifest, subjects, run):
+    return {"format": "repose-batch", "versions": records.versions(),
+            "manifest": {"path": manifest["path"], "sha256": file_hash(manifest["path"]), "content": manifest["data"]},
+            "command": ["repose", "batch", *sys.argv[1:]],
+            "settings": {"scheduler": args.scheduler or "local", "workers": run.get("workers"),
+                         "retry_failed": args.retry_failed},
+            "subjects": subjects, "run": run}
+
+
+def _run(args, manifest, subjects, tasks, out_dir, executable):
+    start, to_run = _triage(tasks, args.retry_failed, out_dir)
+    run = {"started": _now(), "tasks": len(tasks), "to_run": len(to_run)}
+    by_out = {r["out"]: i for i, r in enumerate(start)}  # a key repeats when a result is asked twice
+    print(f"batch: {len(subjects)} subjects, {len(tasks)} tasks: {len(to_run)} to run, "
+          f"{sum(r['status'] == 'skipped' for r in start)} complete before, "
+          f"{sum(r['status'] == 'failed' for r in start)} failed before"
+          f"{' (not retried: --retry-failed)' if any(r['status'] == 'failed' for r in start) else ''}", flush=True)
+    if args.dry_run:
+        for r in start:
+            print(f"  {r['subject']:<20} {r['task']:<28} {'would run' if r['status'] == 'not run' else r['status']}")
+        return start, run
+    t0 = time.monotonic()
+    if to_run:
+        client, cluster, threads, link = _connect(args)
+        try:
+            run["workers"] = _check_workers(client, executable) if args.scheduler else len(client.nthreads())
+            print(f"batch: {run['workers']} worker{'s' if run['workers'] != 1 else ''} on "
+                  f"{args.scheduler or 'a local cluster'}" + (f", dashboard {link}" if link else ""), flush=True)
+            run["dashboard"] = link
+            futures = _submit(client, to_run, start, threads)
+            _collect(client, futures, start, by_out, args, manifest, subjects, run, out_dir)
+        finally:
+            client.close()
+            if cluster:
+                cluster.close()
+        store.sweep(out_dir)  # every task has ended: what is left half-written belonged to lost workers
+    run["finished"], run["seconds"] = _now(), round(time.monotonic() - t0, 3)
+    posed = sum(r["ran"] == "this" and r["status"] == "done" and r["kind"] != "prepare" for r in start)
+    run["poses_done"] = posed
+    run["poses_per_minute"] = round(60.0 * posed / run["seconds"], 3) if posed and run["seconds"] > 0 else None
+    return start, run
+
+
+def _collect(client, futures, start, by_out, args, manifest, subjects, run, out_dir):
+    from distributed import as_completed
+    progress = Progress(len(futures))
+    last_write = 0.0
+    workers = set(client.scheduler_info()["workers"])
+    for future in as_completed(futures):
+        t = futures[future]
+        now = set(client.scheduler_info()["workers"])
+        for lost in sorted(workers - now):
+            progress.note(f"batch: worker {lost} left the cluster; Dask runs its tasks again on the others")
+        workers = now
+        try:
+            result = future.result()
+        except Exception as e:  # noqa: BLE001 - a worker lost too often (KilledWorker), a lost connection
+            result = {"status": "failed", "message": f"{type(e).__name__}: {' '.join(str(e).split())}"}
+        record = {**_describe(t), **result, "ran": "this"}
+        start[by_out[t["out"]]] = record
+        if record["status"] != "done":
+            progress.note(f"batch: failed: {t['subject']} {t['task']}: {record['message']}")
+        progress.update(record["status"])
+        if time.monotonic() - last_write > 2:
+            records.write_records(out_dir, _header(args, manifest, subjects, run), start)
+            last_write = time.monotonic()
+    progress.close()
+
+
+def main(argv):
+    try:
+        args = parse_args(argv)
+        manifest = load_manifest(args.manifest)
+    except (UsageError, ManifestError) as e:
+        print(f"repose: error: {e}", file=sys.stderr)
+        return 2
+    executable = os.environ.get("REPOSE_EXECUTABLE") or shutil.which("repose")
+    if not executable:
+        print("repose: error: run the batch as `repose batch` (the repose executable was not found)", file=sys.stderr)
+        return 2
+    out_dir = os.path.abspath(args.out)
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+        subjects, tasks = plan_batch(manifest, out_dir, os.environ.get("REPOSE_VERSION", "unknown"), executable)
+        start, run = _run(args, manifest, subjects, tasks, out_dir, executable)
+        if not args.dry_run:
+            records.write_records(out_dir, _header(args, manifest, subjects, run), start)
+    except KeyboardInterrupt:
+        print("\nrepose: error: interrupted; complete results are kept (run again to go on)", file=sys.stderr)
+        return 130
+    except (OSError, RuntimeError) as e:
+        print(f"repose: error: {' '.join(str(e).split())}", file=sys.stderr)
+        return 1
+    if args.dry_run:
+        return 0
+    counts = {s: sum(r["status"] == s for r in start) for s in ("done", "skipped", "failed")}
+    pace = f", {run['poses_per_minute']:.1f} poses per minute" if run.get("poses_per_minute") else ""
+    print(f"batch: {counts['done']} done, {counts['skipped']} complete before, {counts['failed']} failed in "
+          f"{duration(run['seconds'])}{pace}; records in {out_dir}/batch.csv and batch.json")
+    if counts["failed"]:
+        print(f"repose: error: {out_dir}/batch.csv: {counts['failed']} of {len(start)} tasks failed "
+              f"(messages there; --retry-failed runs them again)", file=sys.stderr)
+        return 1
+    return 0
