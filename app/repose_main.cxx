@@ -40,6 +40,7 @@
 #include "label_table_fit.h"
 #include "mesh_io.h"
 #include "mesh_posing.h"
+#include "pose_quality.h"
 #include "ReposeImageConversion.h"
 #include "vdb_volume_writer.h"
 #include "repose_version.h"
@@ -263,6 +264,18 @@ const char* kAnimateUsage =
     "  --mesh FILE       also pose this mesh per frame (see repose pose --help; repeatable): DIR/frames/<name>_NNNNN.vtp,\n"
     "                    one series per mesh in animation.pvd\n"
     "  --compare M,...   per frame and method (lbs, dqs, lbs+fem, dqs+fem): fidelity.csv and fidelity.png\n";
+
+/// The quality of the pipeline's current pose (its posed mesh against the rest mesh), labels named
+/// from the case's table.
+repose::PoseQuality poseQualityOf(repose::Pipeline& pipeline, const repose::DeformationStats& stats) {
+  repose::LabelTable table;
+  try {
+    if (!pipeline.labelTableTsv().empty()) table = repose::parseLabelTable(pipeline.labelTableTsv());
+  } catch (const std::invalid_argument&) {
+    // A table that does not parse only costs the names (loadCase checked it).
+  }
+  return repose::poseQuality(stats, table);
+}
 
 void printTimings(const repose::Pipeline& pipeline, std::size_t from = 0) {
   const auto& t = pipeline.timings();
@@ -738,9 +751,12 @@ int runPose(const Options& o, int argc, char** argv) {
                       int(o.number("relax-iterations", 1)));
     fidelity.write(out);
   }
+  const repose::PoseQuality quality = poseQualityOf(pipeline, pipeline.posedStats());
   out.commit();
   if (o.has("relax")) std::cout << pipeline.relaxationSummary() << "\n";
   std::cout << "posed outputs written to " << outDir << "\n";
+  std::cout << "quality: " << quality.summary << "\n";
+  for (const std::string& w : quality.warnings) std::cerr << "warning: " << w << "\n";
   printTimings(pipeline);
   return 0;
 }
@@ -911,7 +927,8 @@ int runAnimate(const Options& o, int argc, char** argv) {
   if (relaxing)
     csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start,"
            "strained_region_nodes,strained_region_newton_iterations,pinched_nodes";
-  csv << "\n";
+  csv << ",mesh_inverted_tets,max_stretch,stretched_ml\n";
+  std::vector<std::pair<int, repose::PoseQuality>> warned;  // frames with warnings
   int written = 0;
   double totalPosing = 0, worstPosing = 0, largestVolume = 0;
   int largestDims[3] = {0, 0, 0};
@@ -980,7 +997,10 @@ int runAnimate(const Options& o, int argc, char** argv) {
           << relax->GetContinuationSteps() << "," << int(relax->GetWarmStarted()) << ","
           << relax->GetStrainedRegionNodes() << "," << relax->GetStrainedRegionNewtonIterations() << ","
           << relax->GetPinchedNodes();
-    csv << "\n";
+    const repose::DeformationStats stats = pipeline.posedStats();
+    csv << "," << stats.invertedTets << "," << stats.maxStretch << "," << stats.stretchedVolumeMm3 / 1000.0 << "\n";
+    repose::PoseQuality quality = poseQualityOf(pipeline, stats);
+    if (!quality.warnings.empty()) warned.emplace_back(f, std::move(quality));
     ++written;
     if (written % 10 == 0) std::cout << "animate: " << written << " frames..." << std::endl;
   }
@@ -994,6 +1014,14 @@ int runAnimate(const Options& o, int argc, char** argv) {
   if (largestVolume > 0)
     std::cout << "animate: largest posed volume " << largestDims[0] << " x " << largestDims[1] << " x " << largestDims[2]
               << " = " << std::setprecision(3) << largestVolume / 1e6 << " M voxels\n";
+  // The frames that went wrong, the first few in full (every frame's figures are in frames.csv).
+  std::cout << "animate: quality flagged " << warned.size() << " of " << written << " frames (frames.csv: "
+            << "mesh_inverted_tets, max_stretch, stretched_ml)\n";
+  const std::size_t shown = std::min<std::size_t>(warned.size(), 3);
+  for (std::size_t i = 0; i < shown; ++i)
+    for (const std::string& w : warned[i].second.warnings)
+      std::cerr << "warning: frame " << warned[i].first << ": " << w << "\n";
+  if (warned.size() > shown) std::cerr << "warning: ... and " << warned.size() - shown << " more frames\n";
   return 0;
 }
 

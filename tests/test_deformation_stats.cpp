@@ -17,6 +17,9 @@ TEST(DeformationStats, VolumesRatiosAndInversions) {
   EXPECT_NEAR(s.volumeRatio, 1, 1e-12);
   EXPECT_NEAR(s.maxAbsDetFMinus1, 0, 1e-12);
   EXPECT_EQ(s.invertedTets, 0u);
+  EXPECT_NEAR(s.maxStretch, 1, 1e-9);
+  EXPECT_EQ(s.tets, 2u);
+  EXPECT_EQ(s.stretchedVolumeMm3, 0);
   // Stretch x by 2: every tet doubles; then push node 0 through its face: the first tet inverts.
   repose::Points stretched = rest;
   stretched.col(0) *= 2;
@@ -24,6 +27,14 @@ TEST(DeformationStats, VolumesRatiosAndInversions) {
   EXPECT_NEAR(s.volumeRatio, 2, 1e-12);
   EXPECT_NEAR(s.labelVolumeRatio.at(5), 2, 1e-12);
   EXPECT_NEAR(s.meanAbsDetFMinus1, 1, 1e-12);
+  EXPECT_NEAR(s.maxStretch, 2, 1e-9);
+  EXPECT_EQ(s.stretchedVolumeMm3, 0);
+  // Pulled 5 times along a diagonal and rotated: a web; both tets' rest volume counts (1/6 + 1/3 mm^3).
+  const Eigen::Vector3d u = Eigen::Vector3d(1, 2, -1).normalized();
+  const Eigen::Matrix3d pull = R * (Eigen::Matrix3d::Identity() + 4 * u * u.transpose());
+  s = repose::deformationStats(rest, rest * pull.transpose(), tets, {});
+  EXPECT_NEAR(s.maxStretch, 5, 1e-9);
+  EXPECT_NEAR(s.stretchedVolumeMm3, 0.5, 1e-12);
   repose::Points flipped = rest;
   flipped.row(0) << 0.5, 0.5, 0.5;
   s = repose::deformationStats(rest, flipped, tets, {});

@@ -16,9 +16,9 @@ import os
 import sys
 
 import numpy as np
-from scipy import ndimage
 
-from repose_testing import (TEMP, Image, Mesh, bone_transforms, check, dice, load_json, rigid_bone_dice, run)
+from repose_testing import (TEMP, Image, bone_transforms, check, dice, enclosed_background, load_json,
+                            rigid_bone_dice, run, stretched_volume)
 
 failures = []
 work = os.path.join(TEMP, "contact_phantom")
@@ -44,28 +44,6 @@ def prepare_and_pose(name, *extra):
                      "--out", case, *extra)
     run("pose", "--case", case, "--pose", pose_path, "--out", out)
     return case, out, text
-
-
-def stretched_volume(case, out, limit=3.0):
-    """Rest volume (ml) of the tets whose largest principal stretch exceeds `limit`, and the largest."""
-    rest, posed = Mesh(f"{case}/mesh.vtu"), Mesh(f"{out}/posed_mesh.vtu")
-    t = rest.tets
-
-    def edges(p):
-        return np.stack([p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]], p[t[:, 3]] - p[t[:, 0]]], -1)
-
-    Dr, Dp = edges(rest.points), edges(posed.points)
-    F = Dp @ np.linalg.inv(Dr)
-    smax = np.linalg.svd(F, compute_uv=False)[:, 0]
-    vol = np.abs(np.linalg.det(Dr)) / 6
-    return vol[smax > limit].sum() / 1000.0, smax.max()
-
-
-def enclosed_background(a):
-    comp, n = ndimage.label(a == 0)
-    border = set(np.unique(np.concatenate([comp[0].ravel(), comp[-1].ravel(), comp[:, 0].ravel(),
-                                           comp[:, -1].ravel(), comp[:, :, 0].ravel(), comp[:, :, -1].ravel()])))
-    return np.isin(comp, [c for c in range(1, n + 1) if c not in border]).sum()
 
 
 def shaft_dice(rest, posed, name, child, radius):

@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import numpy as np
+from scipy import ndimage
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 EXE = os.environ["REPOSE_EXE"]
@@ -192,3 +193,30 @@ def label_table(path):
     with open(path) as f:
         next(f)
         return {name: (int(value), kind) for value, name, kind in (line.split() for line in f)}
+
+
+def stretched_volume(case, out, limit=3.0, region=None):
+    """Rest volume (ml) of the tets whose largest principal stretch exceeds `limit`, and the largest;
+    only the tets whose rest centroids (n by 3) `region` keeps, when given."""
+    rest, posed = Mesh(f"{case}/mesh.vtu"), Mesh(f"{out}/posed_mesh.vtu")
+    t = rest.tets
+    if region is not None:
+        t = t[region(rest.points[t].mean(1))]
+
+    def edges(p):
+        return np.stack([p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]], p[t[:, 3]] - p[t[:, 0]]], -1)
+
+    Dr, Dp = edges(rest.points), edges(posed.points)
+    F = Dp @ np.linalg.inv(Dr)
+    smax = np.linalg.svd(F, compute_uv=False)[:, 0]
+    vol = np.abs(np.linalg.det(Dr)) / 6
+    return vol[smax > limit].sum() / 1000.0, smax.max()
+
+
+def enclosed_background(a):
+    """Background voxels (0) of a label array that no path of background joins to the border: holes.
+    The body is 6-connected, so background is 26-connected (a crease closed only at its edges is open)."""
+    comp, n = ndimage.label(a == 0, structure=np.ones((3, 3, 3)))
+    border = set(np.unique(np.concatenate([comp[0].ravel(), comp[-1].ravel(), comp[:, 0].ravel(),
+                                           comp[:, -1].ravel(), comp[:, :, 0].ravel(), comp[:, :, -1].ravel()])))
+    return np.isin(comp, [c for c in range(1, n + 1) if c not in border]).sum()

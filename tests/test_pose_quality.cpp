@@ -1,0 +1,56 @@
+// The quality report of a pose: its summary and the warnings a user acts on.
+#include <gtest/gtest.h>
+
+#include "pose_quality.h"
+
+using namespace repose;
+
+namespace {
+
+bool mentions(const std::vector<std::string>& lines, const std::string& word) {
+  for (const auto& l : lines)
+    if (l.find(word) != std::string::npos) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(PoseQuality, AGoodPoseHasNoWarnings) {
+  DeformationStats s;
+  s.volumeRatio = 1.004;
+  s.tets = 316882;
+  s.invertedTets = 182;  // 0.06 %: in the creases
+  s.maxStretch = 2.1;
+  s.stretchedVolumeMm3 = 3000;  // 3 ml: a joint's own deformation
+  s.labelVolumeRatio = {{0, 1.5}, {5, 0.97}, {24, 1.01}};
+  LabelTable table;
+  table.labels.push_back({5, "muscle", LabelKind::Soft});
+  const PoseQuality q = poseQuality(s, table);
+  EXPECT_TRUE(q.warnings.empty());
+  EXPECT_NE(q.summary.find("body volume 1.0040 of rest, 182 inverted tets, largest stretch 2.1x, 3.0 ml"), std::string::npos)
+      << q.summary;
+  // The worst label is named (label 0, outside every label, is not one).
+  EXPECT_NE(q.summary.find("muscle (label 5) at 0.970"), std::string::npos) << q.summary;
+}
+
+TEST(PoseQuality, EachProblemIsWarnedWithWhatToTry) {
+  DeformationStats s;
+  s.volumeRatio = 1.074;
+  s.tets = 3000000;
+  s.invertedTets = 47000;
+  s.maxStretch = 450;
+  s.stretchedVolumeMm3 = 1939e3;
+  s.labelVolumeRatio = {{7, 0.6}};
+  const PoseQuality q = poseQuality(s, LabelTable());
+  ASSERT_EQ(q.warnings.size(), 4u);
+  EXPECT_TRUE(mentions(q.warnings, "47000 tets turned inside out"));
+  EXPECT_TRUE(mentions(q.warnings, "1939 ml of tissue stretched past 3x (largest 450x)"));
+  EXPECT_TRUE(mentions(q.warnings, "--contact-separation on"));
+  EXPECT_TRUE(mentions(q.warnings, "the body's volume is 1.074 of rest"));
+  EXPECT_TRUE(mentions(q.warnings, "label 7 has 0.600 of its rest volume"));
+  // Limits of one's own.
+  PoseQualityLimits lax;
+  lax.bodyVolumeTolerance = 0.1, lax.labelVolumeTolerance = 0.5, lax.webMl = 5000;
+  s.invertedTets = 0;
+  EXPECT_TRUE(poseQuality(s, LabelTable(), lax).warnings.empty());
+}
