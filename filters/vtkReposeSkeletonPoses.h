@@ -29,7 +29,7 @@ public:
 
   /// Retargeting settings, as `repose animate`: a joint map file ({"BVH joint": "skeleton joint"};
   /// empty = the built-in CMU names), "direction" or "relative" mode, its reference frame, whether
-  /// the root follows the clip's displacement, millimetres per BVH unit.
+  /// the root follows the clip's displacement, millimetres per BVH unit (0: inferred from its leg length).
   vtkSetStdStringFromCharMacro(JointMapFileName);
   vtkGetCharFromStdStringMacro(JointMapFileName);
   vtkSetStdStringFromCharMacro(RetargetMode);
@@ -61,7 +61,7 @@ protected:
   std::string RetargetMode = "direction";
   int ReferenceFrame = 0;
   bool TranslateRoot = true;
-  double UnitScaleMm = 56.44;
+  double UnitScaleMm = 0;  // inferred from the clip's proportions
   int NumberOfFrames = 0;
   double FrameTime = 0;
   std::string FramePose;

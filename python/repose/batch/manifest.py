@@ -208,7 +208,7 @@ def _clips(c, entry, where):
             "map": c.file(clip["map"], f"{at}.map") if clip.get("map") else None, "mode": mode,
             "reference_frame": c.number(clip.get("reference_frame", 0), f"{at}.reference_frame", whole=True),
             "root_motion": bool(clip.get("root_motion", True)),
-            "unit_mm": c.number(clip.get("unit_mm", 56.44), f"{at}.unit_mm")})
+            "unit_mm": c.number(clip.get("unit_mm", 0), f"{at}.unit_mm")})  # 0: inferred
     return clips
 
 
