@@ -71,8 +71,9 @@ def rows():
 t0 = time.monotonic()
 proc = subprocess.Popen([EXE, "batch", manifest, "--out", out, "--workers", "2"], stdout=subprocess.PIPE,
                         stderr=subprocess.STDOUT, text=True)
+BATCH_SECONDS = 600  # about 50 s here; a batch that loses a worker must end, not hang
 killed, left_at_kill = None, 0
-while proc.poll() is None and killed is None:
+while proc.poll() is None and killed is None and time.monotonic() - t0 < BATCH_SECONDS:
     time.sleep(0.2)
     written = [d for d in ("hip", "arm", "knee") if os.path.isfile(os.path.join(out, "tiny", "poses", d, "batch_task.json"))]
     if not written:
@@ -84,7 +85,15 @@ while proc.poll() is None and killed is None:
         killed = posing[0].pid
         posing[0].kill()
         left_at_kill = TASKS - 1 - sum("batch_task.json" in files for _, _, files in os.walk(out))
-log, _ = proc.communicate()
+try:
+    log, _ = proc.communicate(timeout=max(1.0, BATCH_SECONDS - (time.monotonic() - t0)))
+except subprocess.TimeoutExpired:
+    for c in [*psutil.Process(proc.pid).children(recursive=True), proc]:  # its workers hold the pipe too
+        c.kill()
+    log, _ = proc.communicate()
+    print(log)
+    print(f"FAIL: the batch that lost a worker did not end in {BATCH_SECONDS} s (killed)")
+    sys.exit(1)
 print(log)
 first_run = time.monotonic() - t0
 check(killed is not None and left_at_kill > 0,

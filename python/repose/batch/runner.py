@@ -6,6 +6,7 @@ import logging
 import os
 import shutil
 import sys
+import threading
 import time
 import uuid
 from datetime import datetime, timezone
@@ -29,6 +30,7 @@ task failed (its message is in both records)."""
 
 
 WORKER_WAIT_SECONDS = 60  # the workers of a cluster just started (Slurm, Kubernetes) come in after its scheduler
+CLUSTER_START_SECONDS = 120  # a local cluster whose worker died while starting never finishes starting (Dask)
 
 
 class UsageError(Exception):
@@ -98,10 +100,31 @@ def _connect(args):
     cores = os.cpu_count() or 1
     workers = args.workers or cores
     bokeh = importlib.util.find_spec("bokeh") is not None  # Dask's dashboard needs it (not in Debian 12)
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=":0" if bokeh else None, silence_logs=logging.CRITICAL)
+    cluster = _bounded(lambda: LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                            dashboard_address=":0" if bokeh else None, silence_logs=logging.CRITICAL),
+                       CLUSTER_START_SECONDS, "the local cluster did not start (a worker died while starting); run again")
     client = Client(cluster)
     return client, cluster, max(1, cores // workers), client.dashboard_link if bokeh else ""
+
+
+def _bounded(start, seconds, problem):
+    """start() in a thread, waited for at most `seconds`: Dask's start hangs for good when a worker dies during it."""
+    box = {}
+
+    def call():
+        try:
+            box["value"] = start()
+        except BaseException as e:  # noqa: BLE001 - raised again in the caller's thread
+            box["error"] = e
+
+    thread = threading.Thread(target=call, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    if thread.is_alive():
+        raise RuntimeError(f"{problem} (nothing after {seconds} s)")
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
 
 
 def _check_workers(client, executable):

@@ -2,6 +2,7 @@
 returns a record (status, times, figures, message) instead of raising, so one failure is reported
 and the others go on; its result folder appears complete or not at all (store.py)."""
 import os
+import shutil
 import socket
 import subprocess
 import threading
@@ -47,11 +48,12 @@ def prepare_command(task, out):
     return cmd
 
 
-def _die_with_worker():
-    """In the prepare's child: killed when its worker dies (Linux), rather than left preparing alone."""
-    import ctypes
-    import signal
-    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+def _dying_with_worker(cmd):
+    """The command run so that it is killed when its worker dies (Linux's parent-death signal, set by
+    util-linux's setpriv): not left preparing alone. Not by a preexec_fn, which runs Python between
+    fork and exec in a threaded worker and can deadlock there (on the import lock)."""
+    setpriv = shutil.which("setpriv")
+    return [setpriv, "--pdeathsig", "KILL", "--", *cmd] if setpriv else cmd
 
 
 def prepare_subject(task):
@@ -64,7 +66,7 @@ def prepare_subject(task):
     staging = store.staging_dir(task["out"])
     try:
         cmd = prepare_command(task, staging)
-        p = subprocess.run(cmd, capture_output=True, text=True, preexec_fn=_die_with_worker)
+        p = subprocess.run(_dying_with_worker(cmd), capture_output=True, text=True)
         with open(os.path.join(staging, "prepare.log"), "w") as f:
             f.write(" ".join(cmd) + "\n" + p.stdout + p.stderr)
         if p.returncode != 0:
