@@ -132,7 +132,7 @@ const char* kMainUsage =
     "  rig       find the joints from the bone labels and write an editable skeleton.json\n"
     "  voxelize  surface meshes (skin, bones, tissues) -> a label volume and its label table\n"
     "  batch     many subjects x poses and BVH frames from a manifest, on Dask (a local or a remote cluster)\n\n"
-    "Run 'repose COMMAND --help' for the options of a command.\n";
+    "Run 'repose COMMAND --help' for the options of a command; 'repose --version' prints the version.\n";
 
 const char* kDemoUsage =
     "usage: repose demo [--out DIR] [--size tiny|small|medium|large] [--skinning dqs|lbs] [--no-render]\n"
