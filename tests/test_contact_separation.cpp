@@ -9,27 +9,12 @@
 
 #include "contact_separation.h"
 #include "nearest_bones.h"
+#include "volume_test_grids.h"
 
 using namespace repose;
+using namespace repose::testing;
 
 namespace {
-
-ImageGrid makeGrid(int nx, int ny, int nz, Eigen::Vector3d spacing = {1, 1, 1}) {
-  ImageGrid g;
-  g.dims = {nx, ny, nz};
-  g.origin = {10, -4, 7};
-  g.spacing = spacing;
-  g.direction << -1, 0, 0, 0, -1, 0, 0, 0, 1;
-  return g;
-}
-
-template <class T>
-Volume<T> filled(const ImageGrid& g, T value) {
-  Volume<T> v;
-  v.grid = g;
-  v.data.assign(g.voxelCount(), value);
-  return v;
-}
 
 // 26-connected components of the set voxels.
 int components(const MaskVolume& m) {
@@ -57,7 +42,6 @@ int components(const MaskVolume& m) {
   return count;
 }
 
-Eigen::Vector3d centre(const ImageGrid& g, int i, int j, int k) { return g.indexToPhysical(Eigen::Vector3d(i, j, k)); }
 
 }  // namespace
 

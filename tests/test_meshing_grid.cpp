@@ -6,31 +6,10 @@
 
 #include "mesh_budget.h"
 #include "meshing_grid.h"
+#include "volume_test_grids.h"
 
 using namespace repose;
-
-namespace {
-
-ImageGrid makeGrid(int nx, int ny, int nz, Eigen::Vector3d spacing = {1, 1, 1}) {
-  ImageGrid g;
-  g.dims = {nx, ny, nz};
-  g.origin = {10, -4, 7};
-  g.spacing = spacing;
-  g.direction << -1, 0, 0, 0, -1, 0, 0, 0, 1;
-  return g;
-}
-
-template <class T>
-Volume<T> filled(const ImageGrid& g, T value) {
-  Volume<T> v;
-  v.grid = g;
-  v.data.assign(g.voxelCount(), value);
-  return v;
-}
-
-Eigen::Vector3d centre(const ImageGrid& g, int i, int j, int k) { return g.indexToPhysical(Eigen::Vector3d(i, j, k)); }
-
-}  // namespace
+using namespace repose::testing;
 
 TEST(MeshingGrid, BinsTwoByTwoAndKeepsThinBones) {
   const ImageGrid native = makeGrid(8, 6, 5, {1, 1, 3});
