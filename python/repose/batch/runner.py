@@ -1,6 +1,7 @@
 """`repose batch MANIFEST --out DIR`: prepares every subject once, then fans its poses and clip frames
 out over a Dask cluster (a local one by default), skipping what is complete, and keeps the record."""
 import argparse
+import asyncio
 import importlib.util
 import logging
 import os
@@ -31,6 +32,8 @@ task failed (its message is in both records)."""
 
 WORKER_WAIT_SECONDS = 60  # the workers of a cluster just started (Slurm, Kubernetes) come in after its scheduler
 CLUSTER_START_SECONDS = 120  # a local cluster whose worker died while starting never finishes starting (Dask)
+STALL_SECONDS = 120  # tasks pending while every worker is idle this long were lost by the cluster
+LOST_TRIES = 3  # submissions of a task the cluster keeps losing before it is reported failed
 
 
 class UsageError(Exception):
@@ -151,29 +154,56 @@ def _check_workers(client, executable):
     return len(answers)
 
 
-def _submit(client, to_run, start, threads):
-    """Futures of the tasks to run: prepares first (higher priority), poses depending on theirs."""
-    from .tasks import pose_task, prepare_subject
-    run_id = uuid.uuid4().hex[:8]
-    # subject -> its prepare's future, or what an earlier run left: complete, or failed (not retried)
-    prepared = {r["subject"]: {"status": "done" if r["status"] == "skipped" else r["status"],
-                               "message": r.get("message", "")} for r in start if r["kind"] == "prepare"}
-    # One subject's poses before the next's: a worker then loads each case once, not at every switch.
-    # Dask groups tasks by their keys' words before the run id, so all poses are one group, ordered as one.
-    order = {name: i for i, name in enumerate(dict.fromkeys(r["subject"] for r in start))}
-    futures = {}
-    for t in to_run:
+class _Submitter:
+    """Submits the tasks to run: prepares first, then each subject's poses once its prepare has ended.
+    A pose gets its prepare's record (a small dict), not its future: no result travels between workers,
+    where Dask 2022.12 can leave a task fetching from a lost worker for good."""
+
+    def __init__(self, client, to_run, start, threads):
+        self.client, self.threads = client, threads
+        self.run_id = uuid.uuid4().hex[:8]
+        self.futures = {}  # future -> task
+        self.tries = {}  # task key -> submissions
+        # One subject's poses before the next's: a worker then loads each case once, not at every switch.
+        self.order = {name: i for i, name in enumerate(dict.fromkeys(r["subject"] for r in start))}
+        self.waiting = {}  # subject -> its poses, until its prepare ends
+        for t in to_run:
+            if t["kind"] != "prepare":
+                self.waiting.setdefault(t["subject"], []).append(t)
+        for t in to_run:
+            if t["kind"] == "prepare":
+                self.submit(t)
+        # Subjects prepared before (complete, or failed and not retried): their poses go now.
+        for r in start:
+            if r["kind"] == "prepare" and r["subject"] in self.waiting and r["status"] != "not run":
+                self.prepared(r["subject"], {"status": "done" if r["status"] == "skipped" else r["status"],
+                                             "message": r.get("message", "")})
+
+    def submit(self, t, prepared=None):
+        from .tasks import pose_task, prepare_subject
+        n = self.tries[t["out"]] = self.tries.get(t["out"], 0) + 1
         if t["kind"] == "prepare":
-            f = client.submit(prepare_subject, t, key=f"prepare-{run_id}-{t['subject']}", priority=10, pure=False)
-            prepared[t["subject"]] = f
-            futures[f] = t
-    for t in to_run:
-        if t["kind"] != "prepare":
-            f = client.submit(pose_task, prepared[t["subject"]], {**t, "threads": threads},
-                              key=f"{t['kind']}-{run_id}-{t['subject']}-{t['task']}",
-                              priority=-order[t["subject"]], pure=False)
-            futures[f] = t
-    return futures
+            f = self.client.submit(prepare_subject, t, key=f"prepare-{self.run_id}-{t['subject']}-{n}",
+                                   priority=10, pure=False)
+        else:
+            # Dask groups tasks by their keys' words before the run id, so all poses are one group, ordered as one.
+            f = self.client.submit(pose_task, prepared, {**t, "threads": self.threads},
+                                   key=f"{t['kind']}-{self.run_id}-{t['subject']}-{t['task']}-{n}",
+                                   priority=-self.order[t["subject"]], pure=False)
+            f.prepared = prepared
+        self.futures[f] = t
+        return f
+
+    def prepared(self, subject, record):
+        """The subject's prepare has ended (done or failed): its poses are submitted with its record."""
+        for t in self.waiting.pop(subject, []):
+            self.submit(t, {"status": record["status"], "message": record.get("message", "")})
+
+    def resubmit(self, future):
+        """The same task under a new key, for a future the cluster lost."""
+        t = self.futures.pop(future)
+        self.client.cancel([future])
+        return self.submit(t, getattr(future, "prepared", None))
 
 
 def _header(args, manifest, subjects, run):
@@ -205,8 +235,8 @@ def _run(args, manifest, subjects, tasks, out_dir, executable):
             print(f"batch: {run['workers']} worker{'s' if run['workers'] != 1 else ''} on "
                   f"{args.scheduler or 'a local cluster'}" + (f", dashboard {link}" if link else ""), flush=True)
             run["dashboard"] = link
-            futures = _submit(client, to_run, start, threads)
-            _collect(client, futures, start, by_out, args, manifest, subjects, run, out_dir)
+            submitter = _Submitter(client, to_run, start, threads)
+            _collect(client, submitter, start, by_out, args, manifest, subjects, run, out_dir)
         finally:
             client.close()
             if cluster:
@@ -219,30 +249,77 @@ def _run(args, manifest, subjects, tasks, out_dir, executable):
     return start, run
 
 
-def _collect(client, futures, start, by_out, args, manifest, subjects, run, out_dir):
-    from distributed import as_completed
-    progress = Progress(len(futures))
+def _collect(client, submitter, start, by_out, args, manifest, subjects, run, out_dir):
+    from distributed import wait
+    progress = Progress(len(submitter.futures) + sum(len(v) for v in submitter.waiting.values()))
     last_write = 0.0
     workers = set(client.scheduler_info()["workers"])
-    for future in as_completed(futures):
-        t = futures[future]
+    pending = set(submitter.futures)
+    watch = _StallWatch(client, submitter, progress)
+
+    def record(t, result):
+        r = start[by_out[t["out"]]] = {**_describe(t), **result, "ran": "this"}
+        if t["kind"] == "prepare":
+            before = set(submitter.futures)
+            submitter.prepared(t["subject"], r)
+            pending.update(set(submitter.futures) - before)
+        if r["status"] != "done":
+            progress.note(f"batch: failed: {t['subject']} {t['task']}: {r['message']}")
+        progress.update(r["status"])
+
+    while pending:
+        try:
+            finished = wait(pending, timeout=5, return_when="FIRST_COMPLETED").done
+        except (TimeoutError, asyncio.TimeoutError):  # nothing ended in 5 s (Dask's wait raises then)
+            finished = set()
+        pending.difference_update(finished)
         now = set(client.scheduler_info()["workers"])
         for lost in sorted(workers - now):
-            progress.note(f"batch: worker {lost} left the cluster; Dask runs its tasks again on the others")
+            progress.note(f"batch: worker {lost} left the cluster; its tasks run again on the others")
         workers = now
-        try:
-            result = future.result()
-        except Exception as e:  # noqa: BLE001 - a worker lost too often (KilledWorker), a lost connection
-            result = {"status": "failed", "message": f"{type(e).__name__}: {' '.join(str(e).split())}"}
-        record = {**_describe(t), **result, "ran": "this"}
-        start[by_out[t["out"]]] = record
-        if record["status"] != "done":
-            progress.note(f"batch: failed: {t['subject']} {t['task']}: {record['message']}")
-        progress.update(record["status"])
-        if time.monotonic() - last_write > 2:
+        for future in finished:
+            try:
+                result = future.result()
+            except Exception as e:  # noqa: BLE001 - a worker lost too often (KilledWorker), a lost connection
+                result = {"status": "failed", "message": f"{type(e).__name__}: {' '.join(str(e).split())}"}
+            record(submitter.futures[future], result)
+        for t, message in watch.check(pending):
+            record(t, {"status": "failed", "message": message})
+        if finished and time.monotonic() - last_write > 2:
             records.write_records(out_dir, _header(args, manifest, subjects, run), start)
             last_write = time.monotonic()
     progress.close()
+
+
+class _StallWatch:
+    """Tasks pending while the cluster has workers, all of them idle, for STALL_SECONDS were lost (a
+    scheduler that forgot them): they are submitted again, up to LOST_TRIES times, then failed."""
+
+    def __init__(self, client, submitter, progress):
+        self.client, self.submitter, self.progress = client, submitter, progress
+        self.idle_since = None
+
+    def check(self, pending):
+        """Updates `pending` in place; returns the (task, message) of tasks given up."""
+        if not pending or any(self.client.processing().values()) or not self.client.scheduler_info()["workers"]:
+            self.idle_since = None
+            return []
+        if self.idle_since is None:
+            self.idle_since = time.monotonic()
+        if time.monotonic() - self.idle_since < STALL_SECONDS:
+            return []
+        self.idle_since, given_up = None, []
+        for future in list(pending):
+            pending.discard(future)
+            t = self.submitter.futures[future]
+            if self.submitter.tries[t["out"]] >= LOST_TRIES:
+                self.client.cancel([future])
+                given_up.append((t, f"lost by the cluster {LOST_TRIES} times (every worker idle, the task pending)"))
+            else:
+                self.progress.note(f"batch: {t['subject']} {t['task']} was lost by the cluster (every worker idle "
+                                   f"for {STALL_SECONDS} s); submitted again")
+                pending.add(self.submitter.resubmit(future))
+        return given_up
 
 
 def main(argv):
