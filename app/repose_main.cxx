@@ -274,7 +274,7 @@ repose::PoseQuality poseQualityOf(repose::Pipeline& pipeline, const repose::Defo
   } catch (const std::invalid_argument&) {
     // A table that does not parse only costs the names (loadCase checked it).
   }
-  return repose::poseQuality(stats, table);
+  return repose::poseQuality(stats, table, {}, pipeline.posedLabelStats());
 }
 
 void printTimings(const repose::Pipeline& pipeline, std::size_t from = 0) {
@@ -927,7 +927,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
   if (relaxing)
     csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start,"
            "strained_region_nodes,strained_region_newton_iterations,pinched_nodes";
-  csv << ",mesh_inverted_tets,max_stretch,stretched_ml\n";
+  csv << ",mesh_inverted_tets,max_stretch,stretched_ml" << (volumes ? ",contested_bone_voxels" : "") << "\n";
   std::vector<std::pair<int, repose::PoseQuality>> warned;  // frames with warnings
   int written = 0;
   double totalPosing = 0, worstPosing = 0, largestVolume = 0;
@@ -998,7 +998,9 @@ int runAnimate(const Options& o, int argc, char** argv) {
           << relax->GetStrainedRegionNodes() << "," << relax->GetStrainedRegionNewtonIterations() << ","
           << relax->GetPinchedNodes();
     const repose::DeformationStats stats = pipeline.posedStats();
-    csv << "," << stats.invertedTets << "," << stats.maxStretch << "," << stats.stretchedVolumeMm3 / 1000.0 << "\n";
+    csv << "," << stats.invertedTets << "," << stats.maxStretch << "," << stats.stretchedVolumeMm3 / 1000.0;
+    if (volumes) csv << "," << pipeline.posedLabelStats().contestedBoneVoxels;
+    csv << "\n";
     repose::PoseQuality quality = poseQualityOf(pipeline, stats);
     if (!quality.warnings.empty()) warned.emplace_back(f, std::move(quality));
     ++written;
@@ -1016,7 +1018,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
               << " = " << std::setprecision(3) << largestVolume / 1e6 << " M voxels\n";
   // The frames that went wrong, the first few in full (every frame's figures are in frames.csv).
   std::cout << "animate: quality flagged " << warned.size() << " of " << written << " frames (frames.csv: "
-            << "mesh_inverted_tets, max_stretch, stretched_ml)\n";
+            << "mesh_inverted_tets, max_stretch, stretched_ml" << (volumes ? ", contested_bone_voxels" : "") << ")\n";
   const std::size_t shown = std::min<std::size_t>(warned.size(), 3);
   for (std::size_t i = 0; i < shown; ++i)
     for (const std::string& w : warned[i].second.warnings)

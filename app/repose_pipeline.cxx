@@ -44,6 +44,7 @@
 #include "pose.h"
 #include "skeleton.h"
 #include "deformation_stats.h"
+#include "pose_quality.h"
 #include "label_table.h"
 #include "tet_mesh.h"
 
@@ -489,6 +490,16 @@ double Pipeline::restMeshVolume() {
     }
   }
   return signedVolume(restMesh_->GetPoints(), tets_);
+}
+
+PosedLabelStats Pipeline::posedLabelStats() const {
+  PosedLabelStats stats;
+  vtkImageData* labels = labelResampler_ ? labelResampler_->GetOutput() : nullptr;
+  if (!labels || labels->GetNumberOfPoints() == 0) return stats;
+  const double* spacing = labels->GetSpacing();
+  stats.contestedBoneVoxels = std::size_t(labelResampler_->GetContestedBoneVoxels());
+  stats.voxelMm3 = spacing[0] * spacing[1] * spacing[2];
+  return stats;
 }
 
 DeformationStats Pipeline::posedStats() {

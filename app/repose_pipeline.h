@@ -27,6 +27,7 @@ namespace repose {
 
 struct Pose;
 struct DeformationStats;
+struct PosedLabelStats;
 
 struct PrepareSettings {
   double bodyThreshold = -500.0;   ///< HU, with a CT image
@@ -144,6 +145,8 @@ public:
   double posedMeshVolume();
   /// Volume fidelity of the current posed mesh against the rest mesh (per tet label too).
   DeformationStats posedStats();
+  /// Figures of the last posed label volume made (zero before posedLabels()).
+  PosedLabelStats posedLabelStats() const;
   /// Seconds of the last skinning run alone (the interactive cost).
   double lastSkinningSeconds() const;
 

@@ -54,3 +54,20 @@ TEST(PoseQuality, EachProblemIsWarnedWithWhatToTry) {
   s.invertedTets = 0;
   EXPECT_TRUE(poseQuality(s, LabelTable(), lax).warnings.empty());
 }
+
+TEST(PoseQuality, BonesDrivenIntoEachOtherAreWarned) {
+  DeformationStats s;
+  s.tets = 100000;
+  // Without a posed label volume nothing is said of bone voxels.
+  EXPECT_EQ(poseQuality(s, LabelTable()).summary.find("claimed by two bones"), std::string::npos);
+  // A few voxels where thin cartilage rounds away: in the summary, no warning.
+  PosedLabelStats few{400, 1.0};
+  PoseQuality q = poseQuality(s, LabelTable(), {}, few);
+  EXPECT_NE(q.summary.find("400 voxels claimed by two bones (0.4 ml)"), std::string::npos) << q.summary;
+  EXPECT_TRUE(q.warnings.empty());
+  // A tibia cutting 36.6 k voxels out of the femur.
+  PosedLabelStats many{36600, 1.0};
+  q = poseQuality(s, LabelTable(), {}, many);
+  ASSERT_EQ(q.warnings.size(), 1u);
+  EXPECT_TRUE(mentions(q.warnings, "two bones overlap in 36600 voxels (36.6 ml)")) << q.warnings[0];
+}

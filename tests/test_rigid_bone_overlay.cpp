@@ -123,3 +123,33 @@ TEST(RigidBoneOverlay, PrecomputedLabelBoxesGiveTheSameOverlay) {
   huge.data[0] = kMaxBoxedLabel + 1;
   EXPECT_TRUE(restLabelBoxes(huge).empty());
 }
+
+// Two bones driven into each other: the voxels both rigid motions claim are counted once, whichever
+// label the pull left there, and bones apart claim none.
+TEST(RigidBoneOverlay, CountsVoxelsTwoBonesClaim) {
+  LabelVolume rest;
+  rest.grid.dims = {24, 10, 10};
+  rest.grid.spacing = {1, 1, 1};
+  rest.data.assign(rest.grid.voxelCount(), 1);
+  for (int k = 2; k < 6; ++k)
+    for (int j = 2; j < 6; ++j) {
+      for (int i = 2; i < 6; ++i) rest.at(i, j, k) = 7;    // bone A, x 2..5
+      for (int i = 10; i < 14; ++i) rest.at(i, j, k) = 9;  // bone B, x 10..13
+    }
+  for (const auto& [shift, expected] : {std::pair<double, std::size_t>{-6, 2 * 4 * 4}, {-4, 0}, {-8, 4 * 4 * 4}}) {
+    std::vector<RigidBone> bones(2);
+    bones[0].labels = {7};
+    bones[1].labels = {9};
+    bones[1].transform.translation() = Eigen::Vector3d(shift, 0, 0);
+    for (const bool pulledAsB : {false, true}) {
+      // What the pull left: the rest labels, or bone B's label over the whole overlap (a smear).
+      LabelVolume posed = rest;
+      if (pulledAsB)
+        for (std::size_t v = 0; v < posed.data.size(); ++v)
+          if (posed.data[v] == 7) posed.data[v] = 9;
+      std::size_t contested = 99;
+      overlayRigidBones(posed.data.data(), posed.grid, rest, bones, nullptr, &contested);
+      EXPECT_EQ(contested, expected) << "bone B moved by " << shift << " voxels, pulled as B: " << pulledAsB;
+    }
+  }
+}

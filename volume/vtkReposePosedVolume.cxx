@@ -433,6 +433,7 @@ int vtkReposePosedVolume::RequestData(
       repose::resampleLabelsPullInto(labels, restNodes, posedNodes, tets, outGrid, options, array->GetPointer(0),
         static_cast<std::int32_t>(this->BackgroundValue), &report);
       this->RigidBoneVoxels = 0;
+      this->ContestedBoneVoxels = 0;
       vtkDataArray* fixed = restMesh->GetPointData()->GetArray("FixedBone");
       if (this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints())
       {
@@ -456,8 +457,10 @@ int vtkReposePosedVolume::RequestData(
           in.LabelBoxesDims = dims;
         }
         const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, in.FixedBone);
-        this->RigidBoneVoxels = static_cast<vtkIdType>(
-          repose::overlayRigidBones(array->GetPointer(0), voiGrid, labels, bones, in.LabelBoxes.get()));
+        std::size_t contested = 0;
+        this->RigidBoneVoxels = static_cast<vtkIdType>(repose::overlayRigidBones(
+          array->GetPointer(0), voiGrid, labels, bones, in.LabelBoxes.get(), &contested));
+        this->ContestedBoneVoxels = static_cast<vtkIdType>(contested);
       }
       outScalars = array;
     }

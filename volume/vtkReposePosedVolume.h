@@ -63,6 +63,8 @@ public:
   vtkBooleanMacro(RigidBones, bool);
   /// Voxels changed by the rigid-bone pass in the last execution.
   vtkGetMacro(RigidBoneVoxels, vtkIdType);
+  /// Voxels that two bones' rigid motions both claimed in the last execution (bones colliding).
+  vtkGetMacro(ContestedBoneVoxels, vtkIdType);
 
   /// Sub-extent output (e.g. only the slices a viewer shows): with RestrictToSubExtent on, only the voxels
   /// of OutputSubExtent {i0, i1, j0, j1, k0, k1} (indices of the full posed grid, clamped to it) are
@@ -106,6 +108,7 @@ protected:
   double ExtrapolationDistance = -1.0;
   bool RigidBones = true;
   vtkIdType RigidBoneVoxels = 0;
+  vtkIdType ContestedBoneVoxels = 0;
   vtkIdType CoveredVoxels = 0;
   vtkIdType ExtrapolatedVoxels = 0;
   vtkIdType InvertedTets = 0;

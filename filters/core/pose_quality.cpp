@@ -20,7 +20,8 @@ std::string labelName(const LabelTable& table, int value) {
 
 }  // namespace
 
-PoseQuality poseQuality(const DeformationStats& s, const LabelTable& table, const PoseQualityLimits& limits) {
+PoseQuality poseQuality(const DeformationStats& s, const LabelTable& table, const PoseQualityLimits& limits,
+                        const PosedLabelStats& labels) {
   PoseQuality q;
   const double webMl = s.stretchedVolumeMm3 / 1000.0;
   q.summary = format("body volume %.4f of rest, ", s.volumeRatio) + std::to_string(s.invertedTets) +
@@ -33,6 +34,9 @@ PoseQuality poseQuality(const DeformationStats& s, const LabelTable& table, cons
     if (label != 0 && std::abs(ratio - 1) > worstDeviation) worstDeviation = std::abs(ratio - 1), worstLabel = label;
   if (worstLabel != 0)
     q.summary += ", " + labelName(table, worstLabel) + format(" at %.3f of its volume", s.labelVolumeRatio.at(worstLabel));
+  const double contestedMl = double(labels.contestedBoneVoxels) * labels.voxelMm3 / 1000.0;
+  if (labels.voxelMm3 > 0)
+    q.summary += ", " + std::to_string(labels.contestedBoneVoxels) + format(" voxels claimed by two bones (%.1f ml)", contestedMl);
 
   if (s.invertedTets > 0 && double(s.invertedTets) > limits.invertedFraction * double(s.tets))
     q.warnings.push_back(std::to_string(s.invertedTets) +
@@ -50,6 +54,10 @@ PoseQuality poseQuality(const DeformationStats& s, const LabelTable& table, cons
     q.warnings.push_back(labelName(table, worstLabel) +
                          format(" has %.3f of its rest volume (more than %.0f %% off)", s.labelVolumeRatio.at(worstLabel),
                                 100 * limits.labelVolumeTolerance));
+  if (contestedMl > limits.contestedBoneMl)
+    q.warnings.push_back(format("two bones overlap in %.0f voxels (%.1f ml): a joint bends past its range or parts "
+                                "collide; where they overlap the posed volume keeps one bone's label",
+                                double(labels.contestedBoneVoxels), contestedMl));
   return q;
 }
 

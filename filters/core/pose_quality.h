@@ -17,6 +17,15 @@ struct PoseQualityLimits {
   /// Inverted tets, as a fraction of the mesh: a few in the skin's creases are harmless (0.06 % on
   /// the phantom walking); tens of thousands are parts colliding.
   double invertedFraction = 0.001;
+  /// ml of posed voxels two bones' rigid motions both claim: a few voxels where cartilage-thin gaps
+  /// round away are harmless; more is one bone driven into another.
+  double contestedBoneMl = 5;
+};
+
+/// Figures of the posed label volume (zero when none was made).
+struct PosedLabelStats {
+  std::size_t contestedBoneVoxels = 0;  ///< voxels two bones' rigid motions both claim (one bone overwrote another)
+  double voxelMm3 = 0;                  ///< volume of one voxel (mm^3); 0 = no posed label volume
 };
 
 struct PoseQuality {
@@ -26,6 +35,7 @@ struct PoseQuality {
 
 /// The quality of one pose from its deformation statistics; labels are named from `table` when it
 /// knows them (else "label N").
-PoseQuality poseQuality(const DeformationStats& stats, const LabelTable& table, const PoseQualityLimits& limits = {});
+PoseQuality poseQuality(const DeformationStats& stats, const LabelTable& table, const PoseQualityLimits& limits = {},
+                        const PosedLabelStats& labels = {});
 
 }  // namespace repose

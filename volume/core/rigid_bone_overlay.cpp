@@ -115,7 +115,7 @@ std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGri
 
 std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,
                               const std::vector<RigidBone>& bones,
-                              const std::vector<Eigen::AlignedBox3i>* labelBoxes) {
+                              const std::vector<Eigen::AlignedBox3i>* labelBoxes, std::size_t* contestedVoxels) {
   if (rest.data.size() != rest.grid.voxelCount())
     throw std::invalid_argument("rigid bones: volume sizes do not match their grids");
   if (!posedData && posedGrid.voxelCount() > 0) throw std::invalid_argument("rigid bones: null posed volume");
@@ -160,7 +160,14 @@ std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGri
   }
   auto isBone = [&](std::int32_t l) { return l > 0 && l <= maxLabel && boneOfLabel[std::size_t(l)] >= 0; };
 
-  std::atomic<std::size_t> changed{0};
+  // The rest label that bone `other`'s rigid motion brings to output voxel (i, j, k).
+  auto restLabelUnder = [&](std::size_t other, int i, int j, int k) -> std::int32_t {
+    std::size_t index;
+    const Eigen::Vector3d x = bones[other].transform.inverse() * posedGrid.indexToPhysical(Eigen::Vector3d(i, j, k));
+    return nearestVoxel(rest.grid, x, index) ? rest.data[index] : 0;
+  };
+
+  std::atomic<std::size_t> changed{0}, contested{0};
   const auto& od = posedGrid.dims;
   for (std::size_t b = 0; b < bones.size(); ++b) {
     if (restBox[b].isEmpty()) continue;
@@ -188,7 +195,7 @@ std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGri
     const Eigen::Vector3d restOfOrigin =
         rest.grid.physicalToIndex(Ginv * posedGrid.indexToPhysical(Eigen::Vector3d::Zero()));
     parallelFor(std::size_t(hi3[2] - lo3[2] + 1), [&](std::size_t kb, std::size_t ke) {
-      std::size_t local = 0;
+      std::size_t local = 0, localContested = 0;
       for (int k = lo3[2] + int(kb); k < lo3[2] + int(ke); ++k)
         for (int j = lo3[1]; j <= hi3[1]; ++j) {
           Eigen::Vector3d r = restOfOrigin + toRest * Eigen::Vector3d(lo3[0], j, k);
@@ -204,8 +211,15 @@ std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGri
             const bool restIsThisBone = isBone(restLabel) && boneOfLabel[std::size_t(restLabel)] == int(b);
             const bool outIsThisBone = isBone(out) && boneOfLabel[std::size_t(out)] == int(b);
             std::int32_t value = out;
-            if (restIsThisBone)
+            if (restIsThisBone) {
               value = restLabel;
+              // Counted once, by the later of the two bones: the earlier one's label is here by then.
+              if (contestedVoxels && isBone(out) && boneOfLabel[std::size_t(out)] < int(b)) {
+                const std::size_t other = std::size_t(boneOfLabel[std::size_t(out)]);
+                const std::int32_t under = restLabelUnder(other, i, j, k);
+                if (isBone(under) && boneOfLabel[std::size_t(under)] == int(other)) ++localContested;
+              }
+            }
             else if (outIsThisBone && !isBone(restLabel))
               value = restLabel;
             if (value != out) {
@@ -215,8 +229,10 @@ std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGri
           }
         }
       changed += local;
+      contested += localContested;
     }, 1);
   }
+  if (contestedVoxels) *contestedVoxels = contested.load();
   return changed.load();
 }
 

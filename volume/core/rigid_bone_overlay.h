@@ -37,8 +37,12 @@ std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGri
 constexpr std::int32_t kMaxBoxedLabel = 1 << 20;
 std::vector<Eigen::AlignedBox3i> restLabelBoxes(const LabelVolume& rest);
 /// Same as above with the rest bounding boxes from restLabelBoxes(rest) (null or empty: scanned here).
+/// contestedVoxels (optional) receives the number of posed voxels that two bones' rigid motions both
+/// claim (bones colliding: a joint bent past its range, or parts welded at rest); the bone later in
+/// `bones` keeps such a voxel.
 std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,
                               const std::vector<RigidBone>& bones,
-                              const std::vector<Eigen::AlignedBox3i>* labelBoxes);
+                              const std::vector<Eigen::AlignedBox3i>* labelBoxes,
+                              std::size_t* contestedVoxels = nullptr);
 
 }  // namespace repose
