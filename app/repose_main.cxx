@@ -41,6 +41,7 @@
 #include "mesh_io.h"
 #include "mesh_posing.h"
 #include "pose_quality.h"
+#include "progress_line.h"
 #include "ReposeImageConversion.h"
 #include "vdb_volume_writer.h"
 #include "repose_version.h"
@@ -904,6 +905,8 @@ int runAnimate(const Options& o, int argc, char** argv) {
   }
   const std::unique_ptr<repose::BvhRetargeter> retargeter = retargetClip(o, skeleton, motion, bvhPath);
   const FrameRange range = parseFrames(o.get("frames"), motion.frameCount);
+  const std::size_t frameCount = std::size_t(std::max(0, (range.stop - range.start + range.step - 1) / range.step));
+  const auto animateStart = std::chrono::steady_clock::now();
   const bool volumes = o.has("volumes");
   FidelityReport fidelity;
   fidelity.methods = parseCompare(o);
@@ -1004,7 +1007,9 @@ int runAnimate(const Options& o, int argc, char** argv) {
     repose::PoseQuality quality = poseQualityOf(pipeline, stats);
     if (!quality.warnings.empty()) warned.emplace_back(f, std::move(quality));
     ++written;
-    if (written % 10 == 0) std::cout << "animate: " << written << " frames..." << std::endl;
+    if (written % 10 == 0)
+      std::cout << "animate: " << repose::progressLine(std::size_t(written), frameCount, std::chrono::duration<double>(std::chrono::steady_clock::now() - animateStart).count(), "frames")
+                << std::endl;
   }
   repose::writeTextFile(out.stage("animation.pvd"), repose::pvdText(entries));
   repose::writeTextFile(out.stage("frames.csv"), csv.str());

@@ -218,6 +218,11 @@ void Pipeline::note(const std::string& stage) {
   if (progress_) progress_(stage);
 }
 
+void Pipeline::forwardProgressText(vtkObject* caller, unsigned long, void*) {
+  const char* text = vtkAlgorithm::SafeDownCast(caller) ? vtkAlgorithm::SafeDownCast(caller)->GetProgressText() : nullptr;
+  if (progress_ && text && *text) progress_(text);
+}
+
 void Pipeline::timed(const std::string& stage, double seconds) { timings_.push_back({stage, seconds}); }
 
 void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, const std::string& skeletonJson,
@@ -263,6 +268,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   mesher->SetRadiusEdgeRatio(settings.radiusEdgeRatio);
   for (int label : settings.skinLabels) mesher->AddSkinLabel(label);
   mesher->SetSeparateContacts(settings.separateContacts);
+  mesher->AddObserver(vtkCommand::ProgressEvent, this, &Pipeline::forwardProgressText);
   auto mesherErrors = captureErrors(mesher);
   mesher->Update();
   vtkUnstructuredGrid* mesh = mesher->GetOutput();

@@ -11,6 +11,7 @@
 #include <vtkSmartPointer.h>
 
 class vtkAlgorithm;
+class vtkObject;
 class vtkImageData;
 class vtkPolyData;
 class vtkUnstructuredGrid;
@@ -168,6 +169,8 @@ private:
   void note(const std::string& stage);
   void timed(const std::string& stage, double seconds);
 
+  /// A filter's progress text (e.g. the mesher's before TetGen) passed on to the progress callback.
+  void forwardProgressText(vtkObject* caller, unsigned long event, void* data);
   Progress progress_;
   std::function<bool()> cancel_;
   std::string skeletonJson_, labelsExtension_ = ".nii.gz", labelTableTsv_;

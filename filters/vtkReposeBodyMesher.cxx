@@ -235,6 +235,16 @@ int vtkReposeBodyMesher::RequestData(
         this->NumberOfSurfaceTriangles = F.rows();
         report << "surface: " << V.rows() << " points, " << F.rows() << " triangles (reduction " << reduction
                << ", " << SecondsSince(ts) << " s)\n";
+        // TetGen says nothing while it runs: tell the user the size of what it is about to do.
+        std::ostringstream progress;
+        progress << "TetGen: " << F.rows() << " surface triangles and " << seeds.rows() << " bone seeds";
+        if (meshing.spacing.predictedTets > 0)
+        {
+          progress << " into about " << std::lround(meshing.spacing.predictedTets / 1e3) << " k tets";
+        }
+        this->SetProgressText(progress.str().c_str());
+        this->UpdateProgress(0.3);
+        this->SetProgressText(nullptr);  // said once
         return repose::tetrahedralizeSurface(V, F, seeds, meshOptions, &tetReport);
       };
       try

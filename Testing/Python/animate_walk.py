@@ -4,6 +4,7 @@ head keeps the clip's pitch relative to the trunk, every bone stays rigid, nothi
 (a handful of crease tets at most), the body keeps its volume; frames.csv and animation.pvd are written."""
 import csv
 import os
+import re
 import shutil
 import sys
 import xml.etree.ElementTree as ET
@@ -24,6 +25,9 @@ check("the clip drives 15 of 15 joints" in stdout and "warning" not in stdout,
 check("BVH units: CMU units of 1/0.45 inch (leg length 14.2 units), 56.44 mm per unit" in stdout,
       "the clip's units are inferred and said", failures)
 
+progress = re.findall(r"animate: (\d+) of 20 frames \((\d+) %\), .* so far(, about .* left)?", stdout)
+check([p[:2] for p in progress] == [("10", "50"), ("20", "100")] and progress[0][2] and not progress[1][2],
+      f"progress every 10 frames with the time left until the last: {progress}", failures)
 rows = list(csv.DictReader(open(os.path.join(out, "frames.csv"))))
 check(len(rows) == 20, f"frames.csv has one row per frame ({len(rows)})", failures)
 ratios = np.array([float(r["body_volume_ratio"]) for r in rows])

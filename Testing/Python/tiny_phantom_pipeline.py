@@ -1,5 +1,6 @@
 """Fixture: the CLI builds the tiny phantom, prepares it and poses it with DQS and LBS."""
 import os
+import re
 import shutil
 
 from repose_testing import TESTING, TINY, run
@@ -11,6 +12,8 @@ run("phantom", "--size", "tiny", "--out", f"{TINY}/phantom")
 code, out, _ = run("prepare", "--labels", f"{TINY}/phantom/labels.nii.gz", "--skeleton",
                    f"{TINY}/phantom/skeleton.json", "--out", f"{TINY}/case")
 print(out)
+# TetGen says nothing while it runs: prepare tells its size before it starts.
+assert re.search(r"prepare: TetGen: \d+ surface triangles and \d+ bone seeds into about \d+ k tets", out), out
 for method in ("dqs", "lbs"):
     code, out, _ = run("pose", "--case", f"{TINY}/case", "--pose", pose, "--skinning", method,
                        "--out", f"{TINY}/posed_{method}")
