@@ -195,6 +195,7 @@ const char* kPrepareUsage =
 const char* kPoseUsage =
     "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
     "                   [--mesh FILE ...] [--relax [--relax-model M] [--poisson NU]] [--compare lbs,dqs,dqs+fem]\n"
+    "                   [--displacement-field NAME]\n"
     "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels.\n"
@@ -202,6 +203,12 @@ const char* kPoseUsage =
     "                          (background 0) and a float fog grid 'label_<value>' per label; with --image,\n"
     "                          DIR/posed_image.vdb holds a float grid 'ct'. Each grid's transform is the volume's\n"
     "                          origin, spacing and direction (LPS millimetres)\n"
+    "  --displacement-field NAME  also write DIR/NAME (a file name ending .nii.gz, .nii, .nrrd, .mha or .mhd; or\n"
+    "                          just that extension: DIR/posed_displacement<ext>): for every voxel of the posed grid,\n"
+    "                          the displacement in mm along the LPS axes from its centre to the rest point the posed\n"
+    "                          CT is sampled at (ITK's displacement-field convention, a 3-float vector image; 0\n"
+    "                          outside the body). Warping the rest CT by it (itk::WarpImageFilter, linear) gives\n"
+    "                          posed_image: a known-answer case for deformable registration\n"
     "  --mesh FILE             also pose this mesh (.obj, .stl, .ply, .vtp, .vtk; repeat for several): organs,\n"
     "                          vessels, a catheter path (polylines and points too). Written as DIR/posed_<file name>\n"
     "                          in its own format, point and cell data kept where the format holds them. Each vertex\n"
@@ -298,6 +305,18 @@ std::string normalizedFormat(std::string ext) {
   for (const char* known : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd"})
     if (ext == known) return ext;
   throw UsageError("unknown image format '" + ext + "' (use .nii.gz, .nii, .nrrd, .nhdr, .mha or .mhd)");
+}
+
+/// The file name of --displacement-field: a name in the output folder, or just its extension.
+std::string displacementFileName(const std::string& value) {
+  if (value.find('/') != std::string::npos)
+    throw UsageError("--displacement-field takes a file name in the output folder, not a path ('" + value + "')");
+  if (!value.empty() && value[0] == '.') return "posed_displacement" + normalizedFormat(value);
+  for (const char* known : {".nii.gz", ".nii", ".nrrd", ".mha", ".mhd"}) {
+    const std::string ext = known;
+    if (value.size() > ext.size() && value.compare(value.size() - ext.size(), ext.size(), ext) == 0) return value;
+  }
+  throw UsageError("--displacement-field " + value + ": the name must end .nii.gz, .nii, .nrrd, .mha or .mhd");
 }
 
 /// The demo's pose: a hip flexed 60 deg, a knee 45 deg, a shoulder abducted 80 deg, an elbow 90 deg.
@@ -735,6 +754,7 @@ int runPose(const Options& o, int argc, char** argv) {
   const std::string labelsExt =
       vdb ? ".vdb" : o.has("format") ? normalizedFormat(o.get("format")) : pipeline.labelsExtension();
   const std::vector<std::string> compare = parseCompare(o);
+  const std::string displacementName = o.has("displacement-field") ? displacementFileName(o.get("displacement-field")) : "";
   std::unique_ptr<repose::MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
   repose::AtomicOutputs out(outDir);
   if (vdb) {
@@ -745,6 +765,7 @@ int runPose(const Options& o, int argc, char** argv) {
     writePosed(pipeline, out, labelsExt, imageExt);
   }
   if (meshes) writePosedMeshes(pipeline, *meshes, out);
+  if (!displacementName.empty()) repose::writeImage(pipeline.posedDisplacement(), out.stage(displacementName));
   if (!compare.empty()) {
     FidelityReport fidelity;
     fidelity.methods = compare;
@@ -1139,7 +1160,7 @@ int main(int argc, char** argv) {
       return runPose(Options(argc, argv, 2,
                              {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model", "relax-volume",
                               "relax-continuation", "relax-strained-region", "poisson",
-                              "compare", "mesh"},
+                              "compare", "mesh", "displacement-field"},
                              {"relax"}),
                      argc, argv);
     if (command == "voxelize") {

@@ -452,7 +452,7 @@ void Pipeline::connectPosing() {
   labelResampler_->SetInterpolationToNearest();
   labelResampler_->SetBackgroundValue(0);
   if (maxPosedVoxels_ >= 0) labelResampler_->SetMaxVoxels(maxPosedVoxels_);
-  imageResampler_ = nullptr;
+  imageResampler_ = displacementResampler_ = nullptr;
   relax_ = relaxBySkinning_[0] = relaxBySkinning_[1] = nullptr;
 }
 
@@ -564,7 +564,7 @@ void Pipeline::setRestImage(vtkImageData* image, const std::string& imageName) {
 
 void Pipeline::setMaxPosedVoxels(double voxels) {
   maxPosedVoxels_ = voxels;
-  for (vtkReposePosedVolume* resampler : {labelResampler_.Get(), imageResampler_.Get()})
+  for (vtkReposePosedVolume* resampler : {labelResampler_.Get(), imageResampler_.Get(), displacementResampler_.Get()})
     if (resampler) resampler->SetMaxVoxels(voxels);
 }
 
@@ -611,6 +611,7 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
   deformer_->SetInputConnection(1, port);
   labelResampler_->SetInputConnection(2, port);
   if (imageResampler_) imageResampler_->SetInputConnection(2, port);
+  if (displacementResampler_) displacementResampler_->SetInputConnection(2, port);
 }
 
 namespace {
@@ -723,6 +724,22 @@ vtkImageData* Pipeline::posedImage() {
   posedMesh();
   runStage(imageResampler_, "posed image");
   return imageResampler_->GetOutput();
+}
+
+vtkImageData* Pipeline::posedDisplacement() {
+  if (!skinning_) throw std::runtime_error("no case loaded");
+  if (!displacementResampler_) {
+    // The rest labels give the grid (the CT's, when there is one: checked to be the same).
+    displacementResampler_ = vtkSmartPointer<vtkReposePosedVolume>::New();
+    displacementResampler_->SetInputData(0, restLabels_);
+    displacementResampler_->SetInputData(1, restMesh_);
+    displacementResampler_->SetInputConnection(2, posedSource()->GetOutputPort());
+    displacementResampler_->OutputDisplacementOn();
+    if (maxPosedVoxels_ >= 0) displacementResampler_->SetMaxVoxels(maxPosedVoxels_);
+  }
+  posedMesh();
+  runStage(displacementResampler_, "displacement");
+  return displacementResampler_->GetOutput();
 }
 
 }  // namespace repose

@@ -137,6 +137,9 @@ public:
   vtkPolyData* posedSurfaces();
   vtkImageData* posedLabels();
   vtkImageData* posedImage();   ///< null without a rest image
+  /// The map the posed image is pulled through, on the posed grid: 3 floats per voxel "Displacement",
+  /// mm along the LPS axes from each voxel centre to its rest point (0 outside the body).
+  vtkImageData* posedDisplacement();
   /// Largest posed volume in voxels: a larger one makes posedLabels()/posedImage() throw with its size
   /// and the posed body's span (default: vtkReposePosedVolume's, 512 M; 0 = no limit).
   void setMaxPosedVoxels(double voxels);
@@ -188,7 +191,7 @@ private:
   double relaxStrainedRegionThreshold_ = 0.0;            // the filter's default, read when it is made
   vtkAlgorithm* posedSource() const;
   vtkSmartPointer<vtkReposeSurfaceDeformer> deformer_;
-  vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_;
+  vtkSmartPointer<vtkReposePosedVolume> labelResampler_, imageResampler_, displacementResampler_;
   double maxPosedVoxels_ = -1;  // < 0: the resamplers' default
   std::vector<StageTime> timings_;
   Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor> tets_;  // rest mesh connectivity, for volumes

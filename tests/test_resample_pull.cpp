@@ -73,6 +73,18 @@ struct Rigid {
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
 };
+// A linear ramp of the rest index (exact under trilinear sampling) as a volume on g.
+double ramp(const Eigen::Vector3d& r) { return 2.0 * r[0] - 3.0 * r[1] + 0.5 * r[2] + 7.0; }
+repose::IntensityVolume rampVolume(const ImageGrid& g) {
+  repose::IntensityVolume F;
+  F.grid = g;
+  F.data.resize(g.voxelCount());
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i) F.at(i, j, k) = float(ramp(Eigen::Vector3d(i, j, k)));
+  return F;
+}
+
 Rigid testMotion() {
   Rigid m;
   m.R = Eigen::AngleAxisd(30.0 * M_PI / 180.0, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
@@ -156,13 +168,7 @@ TEST(ResamplePull, IdentityPoseReproducesInputOnOriginalLattice) {
 
 TEST(ResamplePull, TrilinearOfLinearRampIsExact) {
   const ImageGrid g = testGrid();
-  repose::IntensityVolume F;
-  F.grid = g;
-  F.data.resize(g.voxelCount());
-  auto ramp = [](const Eigen::Vector3d& r) { return 2.0 * r[0] - 3.0 * r[1] + 0.5 * r[2] + 7.0; };
-  for (int k = 0; k < g.dims[2]; ++k)
-    for (int j = 0; j < g.dims[1]; ++j)
-      for (int i = 0; i < g.dims[0]; ++i) F.at(i, j, k) = float(ramp(Eigen::Vector3d(i, j, k)));
+  const repose::IntensityVolume F = rampVolume(g);
   Points V;
   Tets T;
   gridMesh(g, V, T);
@@ -690,4 +696,56 @@ TEST(PosedOutputGrid, BoundedToTheBodyOnTheRestLattice) {
   EXPECT_NO_THROW(repose::posedOutputGrid(g, far, options));
   EXPECT_EQ(repose::extrapolationReachVoxels(g, -1), 4 + 2);  // 2 x 1.25 mm over 0.8 mm, + 2
   EXPECT_EQ(repose::extrapolationReachVoxels(g, 0), 0);
+}
+
+// The displacement field of an affine pose is known everywhere the map reaches: u(x) = A^-1 (x - c) + c - x,
+// covered and extrapolated voxels alike; elsewhere 0. Sampling the rest image through it (trilinear, as
+// a warp filter would) gives the posed image the pull wrote.
+TEST(ResamplePull, DisplacementFieldIsTheMapTheIntensityPullSamplesThrough) {
+  const ImageGrid g = testGrid();
+  const repose::IntensityVolume F = rampVolume(g);
+  Points V;
+  Tets T;
+  peeledMesh(g, V, T);
+  Eigen::Matrix3d A;
+  A << 1.3, 0.2, 0.0, 0.0, 0.9, 0.15, 0.1, 0.0, 1.1;
+  const Eigen::Vector3d c(2.0, -1.0, 35.0);
+  Points P(V.rows(), 3);
+  for (Eigen::Index v = 0; v < V.rows(); ++v) P.row(v) = (A * (V.row(v).transpose() - c) + c).transpose();
+  const ImageGrid out = repose::posedOutputGrid(g, P, 4);
+  const repose::TetBoundary B = repose::tetBoundary(T);
+  repose::PullResampleOptions opt;
+  opt.boundary = &B;
+  repose::PullResampleReport rep;
+  const float background = -999.f;
+  const repose::IntensityVolume O = repose::resampleIntensityPull(F, V, P, T, out, opt, background, &rep);
+  std::vector<float> u(3 * out.voxelCount(), 7.f);
+  repose::displacementPullInto(g, V, P, T, out, opt, u.data());
+  ASSERT_GT(rep.extrapolatedVoxels, 0u);
+  const Eigen::Matrix3d Ainv = A.inverse();
+  std::size_t mapped = 0, zero = 0;
+  double worstMap = 0, worstSample = 0;
+  for (int k = 0; k < out.dims[2]; ++k)
+    for (int j = 0; j < out.dims[1]; ++j)
+      for (int i = 0; i < out.dims[0]; ++i) {
+        const std::size_t v = out.linearIndex(i, j, k);
+        const Eigen::Vector3d x = out.indexToPhysical(Eigen::Vector3d(i, j, k));
+        const Eigen::Vector3d d(u[3 * v], u[3 * v + 1], u[3 * v + 2]);
+        if (O.data[v] == background) {
+          // Not reached (or reached outside the rest grid, where the image is background too).
+          zero += d.isZero();
+          continue;
+        }
+        ++mapped;
+        worstMap = std::max(worstMap, (d - (Ainv * (x - c) + c - x)).norm());
+        // The ramp is linear: trilinear sampling at the field's rest point is exact (edge voxels
+        // replicated within half a voxel of the grid, as the pull samples).
+        Eigen::Vector3d r = g.physicalToIndex(x + d);
+        for (int a = 0; a < 3; ++a) r[a] = std::min(std::max(r[a], 0.0), double(g.dims[a] - 1));
+        worstSample = std::max(worstSample, std::abs(double(O.data[v]) - ramp(r)));
+      }
+  EXPECT_GT(mapped, g.voxelCount() / 2);
+  EXPECT_GT(zero, 0u);
+  EXPECT_LT(worstMap, 2e-3) << "mm, float positions";    // pinholes (mean of neighbours) are exact for an affine map
+  EXPECT_LT(worstSample, 2e-2) << "ramp units";
 }

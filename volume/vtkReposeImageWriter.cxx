@@ -10,6 +10,7 @@
 
 #include "itkImage.h"
 #include "itkImageFileWriter.h"
+#include "itkVector.h"
 #include "itkMetaImageIOFactory.h"
 #include "itkNiftiImageIOFactory.h"
 #include "itkNrrdImageIOFactory.h"
@@ -103,6 +104,12 @@ void WriteWithItk(vtkImageData* input, const std::string& fileName, bool compres
 
 void WriteByType(vtkImageData* input, const std::string& fileName, bool compress)
 {
+  if (input->GetPointData()->GetScalars()->GetNumberOfComponents() == 3)
+  {
+    // A displacement field: ITK's vector image (NIfTI intent "vector", MetaImage 3 channels).
+    WriteWithItk<itk::Vector<float, 3>>(input, fileName, compress);
+    return;
+  }
   switch (input->GetScalarType())
   {
     case VTK_INT:
@@ -187,11 +194,13 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
   {
     return fail("input has no image scalars");
   }
-  if (input->GetPointData()->GetScalars()->GetNumberOfComponents() != 1)
+  const int components = input->GetPointData()->GetScalars()->GetNumberOfComponents();
+  if (components != 1 && !(components == 3 && input->GetScalarType() == VTK_FLOAT))
   {
-    return fail("input scalars have more than one component");
+    return fail("input scalars must have one component (or three floats: a vector field)");
   }
-  const bool compress = EndsWith(target, ".nii.gz");
+  // Single files are compressed where the format allows it (gzip NIfTI, zlib MetaImage, gzip NRRD).
+  const bool compress = EndsWith(target, ".nii.gz") || EndsWith(target, ".mha") || EndsWith(target, ".nrrd");
   const bool pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
   if (!(compress || pair || EndsWith(target, ".nii") || EndsWith(target, ".nrrd") || EndsWith(target, ".mha")))
   {

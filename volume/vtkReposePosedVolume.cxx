@@ -364,7 +364,8 @@ int vtkReposePosedVolume::RequestData(
     const vtkIdType voxels = static_cast<vtkIdType>(voiGrid.voxelCount());
     // Rest scalars: converted again only when the array changes.
     const int kind = this->Interpolation == Nearest ? 0 : 1;
-    if (in.Scalars != scalars || in.ScalarsTime != scalars->GetMTime() || in.ScalarsKind != kind)
+    if (!this->OutputDisplacement &&
+      (in.Scalars != scalars || in.ScalarsTime != scalars->GetMTime() || in.ScalarsKind != kind))
     {
       in.Scalars = nullptr;
       in.LabelBoxes.reset();
@@ -411,7 +412,17 @@ int vtkReposePosedVolume::RequestData(
     }
     repose::PullResampleReport report;
     vtkSmartPointer<vtkDataArray> outScalars;
-    if (this->Interpolation == Nearest)
+    this->ContestedBoneVoxels = 0;
+    if (this->OutputDisplacement)
+    {
+      auto array = vtkSmartPointer<vtkFloatArray>::New();
+      array->SetNumberOfComponents(3);
+      array->SetNumberOfTuples(voxels);
+      repose::displacementPullInto(rest, restNodes, posedNodes, tets, outGrid, options, array->GetPointer(0), &report);
+      this->RigidBoneVoxels = 0;
+      outScalars = array;
+    }
+    else if (this->Interpolation == Nearest)
     {
       const repose::LabelVolume& labels = in.Labels;
       // Written in place: the core fills every voxel. The previous pose's array is reused when nothing
@@ -472,7 +483,9 @@ int vtkReposePosedVolume::RequestData(
         array->GetPointer(0), static_cast<float>(this->BackgroundValue), &report);
       outScalars = array;
     }
-    outScalars->SetName(scalars->GetName() ? scalars->GetName() : "ImageScalars");
+    outScalars->SetName(this->OutputDisplacement ? "Displacement"
+        : scalars->GetName()                       ? scalars->GetName()
+                                                   : "ImageScalars");
     outScalars->Modified();
     // The full grid's origin: the sub-extent's voxels keep their indices.
     output->Initialize();
@@ -498,6 +511,7 @@ void vtkReposePosedVolume::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "RigidBones: " << this->RigidBones << "\n";
+  os << indent << "OutputDisplacement: " << this->OutputDisplacement << "\n";
   os << indent << "Interpolation: " << (this->Interpolation == Nearest ? "Nearest" : "Linear") << "\n";
   os << indent << "BackgroundValue: " << this->BackgroundValue << "\n";
   os << indent << "PaddingVoxels: " << this->PaddingVoxels << "\n";

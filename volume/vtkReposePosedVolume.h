@@ -31,6 +31,14 @@ public:
   void SetInterpolationToNearest() { this->SetInterpolation(Nearest); }
   void SetInterpolationToLinear() { this->SetInterpolation(Linear); }
 
+  /// Output the map itself instead of a resampled image: a 3-component float array "Displacement",
+  /// for every output voxel the displacement (mm, physical LPS axes) from its centre to the rest point
+  /// Linear interpolation samples the rest image at (0 where the map does not reach). A known-answer
+  /// field for deformable registration: warping the rest CT by it gives the posed CT. Default off.
+  vtkSetMacro(OutputDisplacement, bool);
+  vtkGetMacro(OutputDisplacement, bool);
+  vtkBooleanMacro(OutputDisplacement, bool);
+
   /// Value of voxels outside the posed mesh (and of rest points outside the rest image).
   vtkSetMacro(BackgroundValue, double);
   vtkGetMacro(BackgroundValue, double);
@@ -107,6 +115,7 @@ protected:
   double MaxVoxels = 512e6;
   double ExtrapolationDistance = -1.0;
   bool RigidBones = true;
+  bool OutputDisplacement = false;
   vtkIdType RigidBoneVoxels = 0;
   vtkIdType ContestedBoneVoxels = 0;
   vtkIdType CoveredVoxels = 0;

@@ -125,6 +125,28 @@ def rigid_bone_dice(rest, posed, labels, G):
     return dice(got, expected)
 
 
+def read_mha(path):
+    """A MetaImage file read here, not by VTK or ITK: (voxels as a[k, j, i, channel], header fields)."""
+    import zlib
+    with open(path, "rb") as f:
+        data = f.read()
+    header, pos = {}, 0
+    while True:
+        end = data.index(b"\n", pos)
+        key, _, value = data[pos:end].decode().partition(" = ")
+        header[key.strip()] = value.strip()
+        pos = end + 1
+        if key.strip() == "ElementDataFile":
+            break
+    raw = data[pos:]
+    if header.get("CompressedData") == "True":
+        raw = zlib.decompress(raw)
+    dims = [int(d) for d in header["DimSize"].split()]
+    channels = int(header.get("ElementNumberOfChannels", "1"))
+    dtype = {"MET_FLOAT": np.float32, "MET_INT": np.int32, "MET_SHORT": np.int16, "MET_UCHAR": np.uint8}[header["ElementType"]]
+    return np.frombuffer(raw, dtype=dtype).reshape(dims[2], dims[1], dims[0], channels), header
+
+
 def check(cond, message, failures):
     print(("ok   " if cond else "FAIL ") + message)
     if not cond:

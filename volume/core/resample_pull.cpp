@@ -367,6 +367,15 @@ inline void restStart(const TetSetup& s, int i0, int j, const double* rk, double
   for (int m = 0; m < 3; ++m) r[m] = rk[m] + s.A[m][1] * j + s.A[m][0] * i0 + offset;
 }
 
+// visit(i - i0, r) for each voxel of the run, r its rest index (the rest index steps by a constant vector).
+template <class Visit>
+inline void forRun(const TetSetup& s, int i0, int i1, int j, const double* rk, Visit&& visit) {
+  double r[3];
+  restStart(s, i0, j, rk, 0.0, r);
+  const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
+  for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz) visit(i - i0, r);
+}
+
 // Kernels turn a run of voxels (i0..i1, j) of a tet into samples: push(i - i0, value).
 //   cover(s, i0, i1, j, rk, push)     pass 1: every voxel of the run
 //   extendAt(r, distance, restDistanceToTet, value)
@@ -466,24 +475,55 @@ struct IntensityKernel {
   }
   template <class Push>
   void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, Push&& push) const {
-    double r[3];
-    restStart(s, i0, j, rk, 0.0, r);
-    const double sx = s.A[0][0], sy = s.A[1][0], sz = s.A[2][0];
-    for (int i = i0; i <= i1; ++i, r[0] += sx, r[1] += sy, r[2] += sz)
-      push(i - i0, s.restInside || inside(r) ? sample(r) : background);
+    forRun(s, i0, i1, j, rk, [&](int n, const double* r) { push(n, s.restInside || inside(r) ? sample(r) : background); });
+  }
+  // Whether an extrapolation may sample rest index r: inside the rest grid, owned by its tet.
+  template <class RestDistance>
+  bool extends(const double r[3], double distance, RestDistance&& restDistanceToTet) const {
+    if (!inside(r)) return false;
+    if (!owner.restCovered && !owner.restDistance) return true;
+    const std::size_t n = (std::size_t(int(r[2] + 0.5)) * std::size_t(dy) + std::size_t(int(r[1] + 0.5))) *
+                              std::size_t(dx) + std::size_t(int(r[0] + 0.5));
+    return owner.allows(n, distance, restDistanceToTet);
   }
   template <class RestDistance>
   bool extendAt(const double r[3], double distance, RestDistance&& restDistanceToTet, float& value) const {
-    if (!inside(r)) return false;
-    if (owner.restCovered || owner.restDistance) {
-      const std::size_t n = (std::size_t(int(r[2] + 0.5)) * std::size_t(dy) + std::size_t(int(r[1] + 0.5))) *
-                                std::size_t(dx) + std::size_t(int(r[0] + 0.5));
-      if (!owner.allows(n, distance, restDistanceToTet)) return false;
-    }
+    if (!extends(r, distance, restDistanceToTet)) return false;
     value = sample(r);
     return true;
   }
 };
+
+// The rest point itself (in rest index space) in place of a sample: the map the intensity kernel
+// samples through, with the same extrapolation rule (inside the rest grid, owned by the tet).
+struct RestIndex {
+  float r[3];
+  bool operator==(const RestIndex& o) const { return r[0] == o.r[0] && r[1] == o.r[1] && r[2] == o.r[2]; }
+};
+constexpr float kNoRestPoint = 1e30f;
+
+struct RestPointKernel {
+  using Value = RestIndex;
+  IntensityKernel bounds;  // its grid bounds and ownership (src unused)
+
+  template <class Push>
+  void cover(const TetSetup& s, int i0, int i1, int j, const double* rk, Push&& push) const {
+    forRun(s, i0, i1, j, rk, [&](int n, const double* r) { push(n, RestIndex{{float(r[0]), float(r[1]), float(r[2])}}); });
+  }
+  template <class RestDistance>
+  bool extendAt(const double r[3], double distance, RestDistance&& restDistanceToTet, RestIndex& value) const {
+    if (!bounds.extends(r, distance, restDistanceToTet)) return false;
+    value = RestIndex{{float(r[0]), float(r[1]), float(r[2])}};
+    return true;
+  }
+};
+
+RestIndex meanRestIndex(const RestIndex* v, int n) {
+  double sum[3] = {0, 0, 0};
+  for (int i = 0; i < n; ++i)
+    for (int m = 0; m < 3; ++m) sum[m] += v[i].r[m];
+  return RestIndex{{float(sum[0] / n), float(sum[1] / n), float(sum[2] / n)}};
+}
 
 // Coverage only: 1 on every voxel of a run.
 struct CoverageKernel {
@@ -1048,6 +1088,44 @@ IntensityKernel intensityKernel(const IntensityVolume& rest, const PullResampleO
   return IntensityKernel{rest.data.data(), rest.grid.dims[0], rest.grid.dims[1], rest.grid.dims[2], background,
                          restOwnership(rest.grid, options)};
 }
+
+}  // namespace
+
+void displacementPullInto(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes,
+                          const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                          float* out, PullResampleReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(restGrid, restGrid.voxelCount(), restNodes, posedNodes, tets, outGrid, options);
+  if (!out) throw std::invalid_argument("pull resample: null output buffer");
+  const Box voi = voiOf(outGrid, options);
+  const ImageGrid grid = options.outputExtent ? extentGrid(outGrid, *options.outputExtent) : outGrid;
+  const RestIndex none{{kNoRestPoint, kNoRestPoint, kNoRestPoint}};
+  // The rest points are written into `out` itself (3 floats per voxel, as the field).
+  static_assert(sizeof(RestIndex) == 3 * sizeof(float), "a rest point is three packed floats");
+  RestIndex* rest = reinterpret_cast<RestIndex*>(out);
+  const RestPointKernel kernel{IntensityKernel{nullptr, restGrid.dims[0], restGrid.dims[1], restGrid.dims[2], 0.0f,
+                                               restOwnership(restGrid, options)}};
+  resampleInto(restGrid, restNodes, posedNodes, tets, outGrid, options, kernel, none, meanRestIndex, voi, rest, report,
+               start);
+  // Rest index -> rest point (mm) -> displacement from the voxel's own centre.
+  const Eigen::Matrix3d restToPhysical = restGrid.direction * restGrid.spacing.asDiagonal();
+  parallelFor(std::size_t(grid.dims[2]), [&](std::size_t kb, std::size_t ke) {
+    for (int k = int(kb); k < int(ke); ++k)
+      for (int j = 0; j < grid.dims[1]; ++j)
+        for (int i = 0; i < grid.dims[0]; ++i) {
+          float* d = out + 3 * grid.linearIndex(i, j, k);
+          if (d[0] == kNoRestPoint) {
+            d[0] = d[1] = d[2] = 0.0f;
+            continue;
+          }
+          const Eigen::Vector3d x = restGrid.origin + restToPhysical * Eigen::Vector3d(d[0], d[1], d[2]);
+          const Eigen::Vector3d u = x - grid.indexToPhysical(Eigen::Vector3d(i, j, k));
+          for (int m = 0; m < 3; ++m) d[m] = float(u[m]);
+        }
+  }, 1);
+}
+
+namespace {
 
 float meanOf(const float* v, int n) {
   double sum = 0;

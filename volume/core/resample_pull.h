@@ -124,4 +124,15 @@ IntensityVolume resampleIntensityPull(const IntensityVolume& rest, const Points&
                                       const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
                                       float background, PullResampleReport* report = nullptr);
 
+/// The map itself: for every voxel of outGrid (or the options' sub-extent), the displacement from
+/// its centre to the rest point it is pulled back to, in mm along the physical (LPS) axes, exactly
+/// the map resampleIntensityPull samples the rest image through (the same tets, extrapolation and
+/// pinhole filling, the latter as the mean of the neighbours' rest points). Voxels the map does not
+/// reach (outside the posed body, where the posed image is background) get 0. out holds 3 floats per
+/// voxel (x, y, z), i fastest. restGrid: the grid the rest nodes lie in (its voxels bound the
+/// extrapolation as the rest image does).
+void displacementPullInto(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes,
+                          const Tets& tets, const ImageGrid& outGrid, const PullResampleOptions& options,
+                          float* out, PullResampleReport* report = nullptr);
+
 }  // namespace repose
