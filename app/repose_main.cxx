@@ -198,7 +198,8 @@ const char* kPoseUsage =
     "                   [--displacement-field NAME]\n"
     "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
-    "  volume's format; default: the format of the case's labels.\n"
+    "  volume's format; default: the format of the case's labels. --format vti writes both volumes as VTK XML\n"
+    "  image data with their direction matrix: ParaView opens them lined up with posed_mesh.vtu\n"
     "  --format vdb            OpenVDB instead (Houdini, Blender): DIR/posed_labels.vdb holds an Int32 grid 'labels'\n"
     "                          (background 0) and a float fog grid 'label_<value>' per label; with --image,\n"
     "                          DIR/posed_image.vdb holds a float grid 'ct'. Each grid's transform is the volume's\n"
@@ -254,6 +255,8 @@ const char* kAnimateUsage =
     "                    the built-in map does not know, is an error, not a warning\n"
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
+    "  --format EXT      the format of the frames' volumes (.nii.gz, .nii, .nrrd, .mha, .mhd, .vti); with .vti the\n"
+    "                    label volume and CT of each frame are parts of animation.pvd too (ParaView)\n"
     "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*)\n"
     "  --mode            direction (default): each limb bone points where the BVH bone points, the trunk and\n"
     "                    head bend as the clip's bend from its rest pose; relative: each joint's rotation\n"
@@ -302,9 +305,9 @@ std::vector<int> boneLabels(const std::string& skeletonJson) {
 
 std::string normalizedFormat(std::string ext) {
   if (!ext.empty() && ext[0] != '.') ext = "." + ext;
-  for (const char* known : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd"})
+  for (const char* known : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd", ".vti"})
     if (ext == known) return ext;
-  throw UsageError("unknown image format '" + ext + "' (use .nii.gz, .nii, .nrrd, .nhdr, .mha or .mhd)");
+  throw UsageError("unknown image format '" + ext + "' (use .nii.gz, .nii, .nrrd, .nhdr, .mha, .mhd or .vti)");
 }
 
 /// The file name of --displacement-field: a name in the output folder, or just its extension.
@@ -753,6 +756,7 @@ int runPose(const Options& o, int argc, char** argv) {
   const bool vdb = isVdbFormat(o.get("format"));
   const std::string labelsExt =
       vdb ? ".vdb" : o.has("format") ? normalizedFormat(o.get("format")) : pipeline.labelsExtension();
+  if (labelsExt == ".vti") imageExt = ".vti";  // for ParaView, the CT too
   const std::vector<std::string> compare = parseCompare(o);
   const std::string displacementName = o.has("displacement-field") ? displacementFileName(o.get("displacement-field")) : "";
   std::unique_ptr<repose::MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
@@ -936,8 +940,14 @@ int runAnimate(const Options& o, int argc, char** argv) {
     pipeline.setRestImage(repose::readIntensityImage(o.get("image")), o.get("image"));
     imageExt = repose::imageExtension(o.get("image"));
   }
+  if (o.has("format") && !o.has("volumes") && !o.has("image"))
+    throw UsageError("--format sets the format of the frames' volumes: it needs --volumes or --image");
+  const std::string volumeExt = o.has("format") ? normalizedFormat(o.get("format")) : ".nii.gz";
+  if (o.has("format")) imageExt = volumeExt;
+  const bool volumesInPvd = volumeExt == ".vti";
 
   std::unique_ptr<repose::MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
+  const int volumePart = 2 + int(meshes ? meshes->meshes().size() : 0);  // after the mesh, surfaces and meshes
   repose::AtomicOutputs out(outDir);
   repose::makeDirectories(out.stage("frames"));
   const double restVolume = pipeline.restMeshVolume();
@@ -1001,8 +1011,9 @@ int runAnimate(const Options& o, int argc, char** argv) {
     }
     csv << f << "," << time << "," << pipeline.posedMeshVolume() / restVolume << "," << posing * 1e3;
     if (labels) {
-      std::snprintf(name, sizeof(name), "frames/labels_%05d.nii.gz", f);
-      repose::writeImage(labels, out.stage(name));
+      std::snprintf(name, sizeof(name), "frames/labels_%05d", f);
+      repose::writeImage(labels, out.stage(name + volumeExt));
+      if (volumesInPvd) entries.push_back({time, volumePart, name + volumeExt});
       const auto counts = labelCounts(labels);
       for (const auto& [label, count] : restCounts) {
         auto it = counts.find(label);
@@ -1012,6 +1023,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
     if (image) {
       std::snprintf(name, sizeof(name), "frames/image_%05d", f);
       repose::writeImage(image, out.stage(name + imageExt));
+      if (volumesInPvd) entries.push_back({time, volumePart + 1, name + imageExt});
     }
     if (vtkReposeCorotationalRelax* relax = relaxing ? pipeline.relaxation() : nullptr)
       csv << "," << relax->GetLastRelaxTime() << ","
@@ -1176,7 +1188,7 @@ int main(int argc, char** argv) {
       return runAnimate(Options(argc, argv, 2,
                                 {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame",
                                  "unit-mm", "max-voxels", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation",
-                                 "relax-strained-region", "poisson", "relax-start", "compare", "mesh"},
+                                 "relax-strained-region", "poisson", "relax-start", "compare", "mesh", "format"},
                                 {"volumes", "no-root-motion", "relax", "strict"}),
                         argc, argv);
     throw UsageError("unknown command '" + command + "' (see repose --help)");

@@ -6,7 +6,9 @@
 #include "vtkInformationVector.h"
 #include "vtkMatrix3x3.h"
 #include "vtkObjectFactory.h"
+#include "vtkNew.h"
 #include "vtkPointData.h"
+#include "vtkXMLImageDataWriter.h"
 
 #include "itkImage.h"
 #include "itkImageFileWriter.h"
@@ -100,6 +102,21 @@ void WriteWithItk(vtkImageData* input, const std::string& fileName, bool compres
   writer->SetInput(image);
   writer->SetUseCompression(compress);
   writer->Update();
+}
+
+// VTK's XML image data (ParaView's .vti): origin, spacing and the direction matrix, zlib-compressed.
+void WriteVti(vtkImageData* input, const std::string& fileName)
+{
+  vtkNew<vtkXMLImageDataWriter> writer;
+  writer->SetFileName(fileName.c_str());
+  writer->SetInputData(input);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  writer->SetCompressorTypeToZLib();
+  if (!writer->Write() || writer->GetErrorCode() != 0)
+  {
+    throw std::runtime_error("VTK's XML image writer failed");
+  }
 }
 
 void WriteByType(vtkImageData* input, const std::string& fileName, bool compress)
@@ -202,9 +219,10 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
   // Single files are compressed where the format allows it (gzip NIfTI, zlib MetaImage, gzip NRRD).
   const bool compress = EndsWith(target, ".nii.gz") || EndsWith(target, ".mha") || EndsWith(target, ".nrrd");
   const bool pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
-  if (!(compress || pair || EndsWith(target, ".nii") || EndsWith(target, ".nrrd") || EndsWith(target, ".mha")))
+  const bool vti = EndsWith(target, ".vti");
+  if (!(compress || pair || vti || EndsWith(target, ".nii") || EndsWith(target, ".nrrd") || EndsWith(target, ".mha")))
   {
-    return fail("unknown extension; use .nii, .nii.gz, .nrrd, .nhdr, .mha or .mhd");
+    return fail("unknown extension; use .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd or .vti");
   }
   RegisterItkFactories();
 
@@ -231,7 +249,14 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
     {
       fs::create_directory(tmpDir);
     }
-    WriteByType(input, tmpFile.string(), compress);
+    if (vti)
+    {
+      WriteVti(input, tmpFile.string());
+    }
+    else
+    {
+      WriteByType(input, tmpFile.string(), compress);
+    }
     // Some ITK writers (NIfTI) report failures on stderr only.
     if (!fs::exists(tmpFile))
     {

@@ -1,0 +1,59 @@
+"""ParaView's formats: `pose --format vti` writes the posed labels as VTK XML image data with the
+direction matrix (read back by VTK's own reader: the same grid and voxels as the NIfTI output, and
+the posed mesh's nodes fall on labelled voxels through that geometry); `animate --volumes --format vti`
+lists each frame's label volume in animation.pvd beside its mesh and surfaces."""
+import os
+import shutil
+import sys
+import xml.etree.ElementTree as ET
+
+import numpy as np
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+
+from repose_testing import SHARED, TEMP, TESTING, TINY, Image, Mesh, check, run
+
+failures = []
+work = os.path.join(TEMP, "vti_output")
+shutil.rmtree(work, ignore_errors=True)
+pose = os.path.join(TESTING, "Data", "tiny_pose.json")
+run("pose", "--case", f"{TINY}/case", "--pose", pose, "--format", "vti", "--out", f"{work}/vti")
+run("pose", "--case", f"{TINY}/case", "--pose", pose, "--out", f"{work}/nii")
+
+reader = vtkXMLImageDataReader()
+reader.SetFileName(f"{work}/vti/posed_labels.vti")
+reader.Update()
+vti = reader.GetOutput()
+nii = Image(f"{work}/nii/posed_labels.nii.gz")
+direction = np.array([[vti.GetDirectionMatrix().GetElement(r, c) for c in range(3)] for r in range(3)])
+extent = vti.GetExtent()
+# VTK's origin is that of index 0; the first voxel is at the extent's start.
+first = np.array(vti.GetOrigin()) + direction @ (np.array(vti.GetSpacing()) * np.array(extent[::2]))
+check(np.allclose(direction, nii.direction) and not np.allclose(direction, np.eye(3))
+      and np.allclose(vti.GetSpacing(), nii.spacing) and np.allclose(first, nii.origin)
+      and tuple(vti.GetDimensions()) == tuple(nii.dims),
+      f"posed_labels.vti: grid {vti.GetDimensions()}, direction {direction.round(3).tolist()} as the NIfTI's", failures)
+values = vtk_to_numpy(vti.GetPointData().GetScalars()).reshape(nii.a.shape)
+check(np.array_equal(values, nii.a), f"the same {int((values != 0).sum())} labelled voxels as posed_labels.nii.gz", failures)
+mesh = Mesh(f"{work}/vti/posed_mesh.vtu")
+ijk = np.rint(np.linalg.solve(direction, (mesh.points - first).T).T / np.array(vti.GetSpacing())).astype(int)
+inside = np.all((ijk >= 0) & (ijk < np.array(vti.GetDimensions())), axis=1)
+on_body = (values[ijk[inside, 2], ijk[inside, 1], ijk[inside, 0]] != 0).mean()
+check(inside.all() and on_body > 0.99,
+      f"the posed mesh lines up with the .vti: {100 * on_body:.1f} % of its nodes on labelled voxels", failures)
+
+bvh = os.path.join(SHARED, "mocap", "cmu_short_75frames.bvh")
+run("animate", "--case", f"{TINY}/case", "--bvh", bvh, "--frames", "0:75:37", "--volumes", "--format", ".vti",
+    "--out", f"{work}/animate")
+entries = [(float(e.get("timestep")), int(e.get("part")), e.get("file"))
+           for e in ET.parse(f"{work}/animate/animation.pvd").getroot().iter("DataSet")]
+volumes = [e for e in entries if e[2].endswith(".vti")]
+check(len(volumes) == 3 and all(os.path.isfile(os.path.join(work, "animate", f)) for _, _, f in volumes)
+      and len({t for t, _, _ in entries}) == 3 and len({p for _, p, _ in volumes}) == 1,
+      f"animation.pvd lists each frame's label volume as a part of its time step: {[f for _, _, f in volumes]}", failures)
+code, _, err = run("animate", "--case", f"{TINY}/case", "--bvh", bvh, "--format", "vti", "--out", f"{work}/none",
+                   check=False)
+check(code == 2 and "--format" in err and not os.path.exists(f"{work}/none"),
+      f"--format without volumes is refused: {err.strip()}", failures)
+print(f"{len(failures)} failed")
+sys.exit(1 if failures else 0)
