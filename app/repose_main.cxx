@@ -196,7 +196,8 @@ const char* kPoseUsage =
     "usage: repose pose --case CASE_DIR --pose FILE --out DIR [--skinning dqs|lbs] [--image FILE] [--format EXT]\n"
     "                   [--mesh FILE ...] [--relax [--relax-model M] [--poisson NU]] [--compare lbs,dqs,dqs+fem]\n"
     "                   [--displacement-field NAME]\n"
-    "  Writes DIR/posed_labels<ext>, DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
+    "  Writes DIR/posed_labels<ext> with its names and colours beside it (posed_labels.tsv, and\n"
+    "  posed_labels.ctbl for 3D Slicer), DIR/posed_mesh.vtu, DIR/posed_surfaces.vtp and, with --image,\n"
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels. --format vti writes both volumes as VTK XML\n"
     "  image data with their direction matrix: ParaView opens them lined up with posed_mesh.vtu\n"
@@ -574,11 +575,21 @@ int runPrepare(const Options& o) {
 }
 
 /// Poses a loaded pipeline and writes the posed outputs into `out`.
+/// The case's label table beside a label output: BASE.tsv (Repose's, with kinds) and BASE.ctbl
+/// (3D Slicer's colour table), so names and colours travel with the volume.
+void writeLabelTables(repose::Pipeline& pipeline, repose::AtomicOutputs& out, const std::string& base) {
+  if (pipeline.labelTableTsv().empty()) return;
+  const repose::LabelTable table = repose::parseLabelTable(pipeline.labelTableTsv(), "the case's label table");
+  repose::writeTextFile(out.stage(base + ".tsv"), repose::labelTableToTsv(table));
+  repose::writeTextFile(out.stage(base + ".ctbl"), repose::labelTableToSlicerColorTable(table));
+}
+
 void writePosed(repose::Pipeline& pipeline, repose::AtomicOutputs& out, const std::string& labelsExt,
                 const std::string& imageExt) {
   repose::writeMesh(pipeline.posedMesh(), out.stage("posed_mesh.vtu"));
   repose::writeSurfaces(pipeline.posedSurfaces(), out.stage("posed_surfaces.vtp"));
   repose::writeImage(pipeline.posedLabels(), out.stage("posed_labels" + labelsExt));
+  writeLabelTables(pipeline, out, "posed_labels");
   if (vtkImageData* image = pipeline.posedImage()) repose::writeImage(image, out.stage("posed_image" + imageExt));
 }
 
@@ -765,6 +776,7 @@ int runPose(const Options& o, int argc, char** argv) {
     repose::writeMesh(pipeline.posedMesh(), out.stage("posed_mesh.vtu"));
     repose::writeSurfaces(pipeline.posedSurfaces(), out.stage("posed_surfaces.vtp"));
     writePosedVdb(pipeline, out, imageBackground);
+    writeLabelTables(pipeline, out, "posed_labels");
   } else {
     writePosed(pipeline, out, labelsExt, imageExt);
   }
@@ -950,6 +962,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
   const int volumePart = 2 + int(meshes ? meshes->meshes().size() : 0);  // after the mesh, surfaces and meshes
   repose::AtomicOutputs out(outDir);
   repose::makeDirectories(out.stage("frames"));
+  if (volumes) writeLabelTables(pipeline, out, "frames/labels");
   const double restVolume = pipeline.restMeshVolume();
   std::map<int, long> restCounts;
   if (volumes) restCounts = labelCounts(pipeline.restLabels());

@@ -180,3 +180,21 @@ TEST(LabelTableFit, ThePhantomFitsItsOwnTableNotTotalSegmentators) {
   two.labels = {{20, "sacrum", LabelKind::Bone}, {24, "sternum", LabelKind::Bone}};
   EXPECT_TRUE(checkLabelTableFit(ph.labels, two).fits());
 }
+
+TEST(LabelTable, SlicerColourTableReadsBack) {
+  const LabelTable table = parseLabelTable("value\tname\tkind\tr\tg\tb\ta\n"
+                                           "24\tfemur left\tbone\t200\t180\t120\t255\n"
+                                           "5\tmuscle\tsoft\n"
+                                           "75\tfemur_right\tbone\n");
+  const std::string ctbl = labelTableToSlicerColorTable(table);
+  const LabelTable back = parseLabelTable(ctbl, "posed_labels.ctbl");
+  ASSERT_EQ(back.labels.size(), 4u);  // background first, then the three
+  EXPECT_EQ(back.nameOf(24), "femur_left");
+  EXPECT_EQ(back.find(24)->rgba, (std::array<std::uint8_t, 4>{200, 180, 120, 255}));  // its own colour kept
+  EXPECT_EQ(back.find(75)->rgba, (std::array<std::uint8_t, 4>{241, 214, 145, 255}));  // a bone: Slicer's bone
+  // A soft tissue without a colour gets a stable, visible one.
+  const auto muscle = back.find(5)->rgba;
+  EXPECT_EQ(muscle, parseLabelTable(labelTableToSlicerColorTable(table)).find(5)->rgba);
+  EXPECT_GT(int(muscle[0]) + muscle[1] + muscle[2], 150);
+  EXPECT_EQ(back.find(0)->kind, LabelKind::Background);
+}

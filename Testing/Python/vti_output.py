@@ -1,4 +1,5 @@
-"""ParaView's formats: `pose --format vti` writes the posed labels as VTK XML image data with the
+"""What other tools open: the posed labels' names and colours beside them (posed_labels.tsv, and
+posed_labels.ctbl as 3D Slicer reads colour tables) for every label of the posed volume; `pose --format vti` writes the posed labels as VTK XML image data with the
 direction matrix (read back by VTK's own reader: the same grid and voxels as the NIfTI output, and
 the posed mesh's nodes fall on labelled voxels through that geometry); `animate --volumes --format vti`
 lists each frame's label volume in animation.pvd beside its mesh and surfaces."""
@@ -41,6 +42,18 @@ inside = np.all((ijk >= 0) & (ijk < np.array(vti.GetDimensions())), axis=1)
 on_body = (values[ijk[inside, 2], ijk[inside, 1], ijk[inside, 0]] != 0).mean()
 check(inside.all() and on_body > 0.99,
       f"the posed mesh lines up with the .vti: {100 * on_body:.1f} % of its nodes on labelled voxels", failures)
+
+# Names and colours travel: every label of the posed volume is in both tables, under the case's name.
+case_names = {int(v): n for v, n, *_ in (l.split("\t") for l in open(f"{TINY}/case/labels.tsv").read().splitlines()[1:])}
+tsv = {int(v): n for v, n, *_ in (l.split("\t") for l in open(f"{work}/nii/posed_labels.tsv").read().splitlines()[1:])}
+ctbl = {int(f[0]): (f[1], [int(c) for c in f[2:6]]) for f in
+        (l.split() for l in open(f"{work}/nii/posed_labels.ctbl").read().splitlines() if not l.startswith("#"))}
+present = set(np.unique(nii.a).tolist()) - {0}
+check(present <= set(tsv) and present <= set(ctbl) and all(tsv[v] == case_names[v] for v in present)
+      and all(ctbl[v][0] == case_names[v].replace(" ", "_") and len(ctbl[v][1]) == 4 for v in present)
+      and os.path.isfile(f"{work}/vti/posed_labels.ctbl"),
+      f"posed_labels.tsv and .ctbl name all {len(present)} posed labels as the case does, with colours "
+      f"(e.g. {sorted(present)[0]}: {ctbl[sorted(present)[0]]})", failures)
 
 bvh = os.path.join(SHARED, "mocap", "cmu_short_75frames.bvh")
 run("animate", "--case", f"{TINY}/case", "--bvh", bvh, "--frames", "0:75:37", "--volumes", "--format", ".vti",

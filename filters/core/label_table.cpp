@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -206,6 +207,39 @@ std::string labelTableToTsv(const LabelTable& table) {
     out << l.value << '\t' << l.name << '\t' << labelKindName(l.kind);
     if (l.hasColor)
       for (std::uint8_t c : l.rgba) out << '\t' << int(c);
+    out << '\n';
+  }
+  return out.str();
+}
+
+namespace {
+
+// A colour for a label the table gives none: distinct hues (golden angle), not too dark or pale.
+std::array<std::uint8_t, 4> generatedColour(const LabelInfo& l) {
+  if (l.kind == LabelKind::Bone) return {241, 214, 145, 255};  // Slicer's "bone"
+  const double hue = std::fmod(double(l.value) * 137.508, 360.0) / 60.0;
+  const double s = 0.55, v = 0.85, c = v * s, x = c * (1 - std::fabs(std::fmod(hue, 2.0) - 1)), m = v - c;
+  const int sector = int(hue) % 6;
+  const double rgb[6][3] = {{c, x, 0}, {x, c, 0}, {0, c, x}, {0, x, c}, {x, 0, c}, {c, 0, x}};
+  std::array<std::uint8_t, 4> out{0, 0, 0, 255};
+  for (int i = 0; i < 3; ++i) out[std::size_t(i)] = std::uint8_t(std::lround(255 * (rgb[sector][i] + m)));
+  return out;
+}
+
+}  // namespace
+
+std::string labelTableToSlicerColorTable(const LabelTable& table) {
+  std::ostringstream out;
+  const auto values = std::count_if(table.labels.begin(), table.labels.end(), [](const LabelInfo& l) { return l.value != 0; });
+  out << "# Color table file (3D Slicer): label value, name, R G B A\n# " << values + 1 << " values\n";
+  out << "0 background 0 0 0 0\n";
+  for (const LabelInfo& l : table.labels) {
+    if (l.value == 0) continue;
+    std::string name = l.name;
+    std::replace(name.begin(), name.end(), ' ', '_');
+    const auto rgba = l.hasColor ? l.rgba : generatedColour(l);
+    out << l.value << ' ' << name;
+    for (std::uint8_t c : rgba) out << ' ' << int(c);
     out << '\n';
   }
   return out.str();

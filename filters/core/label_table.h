@@ -55,6 +55,11 @@ LabelTable readLabelTableFile(const std::string& path);
 /// some label has a colour (parseLabelTable reads it back).
 std::string labelTableToTsv(const LabelTable& table);
 
+/// Serializes as a 3D Slicer colour table (.ctbl: "value name R G B A" lines, spaces in names as '_'),
+/// which Slicer loads as the volume's colour node. Labels without a colour get one: bones Slicer's
+/// bone colour, the others hues spread by the golden angle (the same value, the same colour).
+std::string labelTableToSlicerColorTable(const LabelTable& table);
+
 /// The label tables stored beside a label volume, most specific first: for DIR/NAME.nii.gz (or
 /// .nii, .nrrd, .nhdr, .mha, .mhd) those of DIR/NAME.tsv, DIR/NAME.ctbl, DIR/NAME_ColorTable.ctbl
 /// (3D Slicer's export), DIR/NAME.txt and DIR/labels.tsv that exist.

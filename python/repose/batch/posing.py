@@ -10,8 +10,8 @@ from vtkmodules.vtkCommonCore import vtkDataArray
 from vtkmodules.vtkIOXML import (vtkXMLPolyDataReader, vtkXMLPolyDataWriter, vtkXMLUnstructuredGridReader,
                                  vtkXMLUnstructuredGridWriter)
 
-from repose import (vtkReposeCorotationalRelax, vtkReposeImageReader, vtkReposeImageWriter, vtkReposePosedVolume,
-                    vtkReposeSkeletonPoses, vtkReposeSkinning, vtkReposeSurfaceDeformer)
+from repose import (vtkReposeCorotationalRelax, vtkReposeImageReader, vtkReposeImageWriter, vtkReposeLabelTable,
+                    vtkReposePosedVolume, vtkReposeSkeletonPoses, vtkReposeSkinning, vtkReposeSurfaceDeformer)
 
 # Settings words -> the relaxation filter's numbers (as Pipeline::setRelaxation* maps them).
 RELAX_MODEL = {"fixed-corotated": 1, "linear": 0}
@@ -127,6 +127,17 @@ class CasePoser:
             raise RuntimeError(f"{files['labels']}: the case's labels are not integers")
         self.rest_labels.GetPointData().GetScalars().SetName("Labels")
         self.labels_ext = image_extension(files["labels"])
+        self.label_table = None  # the case's table (cases saved before it was kept have none)
+        if manifest.get("labelTable"):
+            table_path = os.path.join(case_dir, manifest["labelTable"])
+            try:
+                with open(table_path) as f:
+                    text = f.read()
+            except OSError as e:
+                raise RuntimeError(f"{table_path}: cannot read the case's label table ({e.strerror})") from None
+            self.label_table = vtkReposeLabelTable()
+            if not self.label_table.SetTableText(text, table_path):
+                raise RuntimeError(self.label_table.GetLastError())
         self.case_dir, self.image_path = case_dir, image_path
         self.poses = vtkReposeSkeletonPoses()
         self.poses.SetSkeletonJSON(self.skeleton_json)
@@ -244,6 +255,11 @@ class CasePoser:
         if "labels" in outputs:
             files.append("posed_labels" + (labels_format or self.labels_ext))
             write_image(posed["labels"], os.path.join(folder, files[-1]))
+            if self.label_table is not None:  # names and colours beside it, as `repose pose` writes them
+                for name, text in (("posed_labels.tsv", self.label_table.GetTsv()),
+                                   ("posed_labels.ctbl", self.label_table.GetSlicerColorTable())):
+                    with open(os.path.join(folder, name), "w") as f:
+                        f.write(text)
         if posed["image"] is not None:
             files.append("posed_image" + image_ext)
             write_image(posed["image"], os.path.join(folder, files[-1]))
