@@ -15,6 +15,7 @@ packages=(
   python3-distributed python3-yaml  # repose batch: Dask's local and remote clusters, YAML manifests
   python3-psutil  # the batch test finds and kills a Dask worker (also a dependency of python3-distributed)
   xvfb xauth
+  clang  # libFuzzer with AddressSanitizer and UndefinedBehaviorSanitizer: the readers' fuzz targets (scripts/fuzz.sh)
 )
 missing=()
 for p in "${packages[@]}"; do

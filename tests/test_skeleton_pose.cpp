@@ -238,3 +238,21 @@ TEST(ForwardKinematics, ChildComposesWithRotatedParentAndRootTranslation) {
   for (const auto& Gj : repose::forwardKinematics(s, t))
     EXPECT_TRUE(near(Gj, Eigen::Isometry3d(Eigen::Translation3d(1, 2, 3))));
 }
+
+// A joint name that is not text would not survive being written into a case (found by fuzz_skeleton_json).
+TEST(Skeleton, JointNamesMustBeText) {
+  auto skeleton = [](const std::string& name) {
+    return R"({"joints": [{"name": ")" + name + R"(", "parent": null, "center": [0, 0, 0], "labels": [1]}]})";
+  };
+  EXPECT_EQ(repose::parseSkeletonJson(skeleton("pelvis")).joints[0].name, "pelvis");
+  EXPECT_EQ(repose::parseSkeletonJson(skeleton("h\xc3\xbc" "fte \xe8\x85\xb0")).joints[0].name, "h\xc3\xbc" "fte \xe8\x85\xb0");
+  for (const std::string bad : {std::string("l\x84\x92r_spine"), std::string("\xc3"), std::string("\xc0\xaf"),
+                                std::string("\xed\xa0\x80"), std::string("a\tb")}) {
+    try {
+      repose::parseSkeletonJson(skeleton(bad));
+      ADD_FAILURE() << "accepted a joint named " << bad;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("name is not text"), std::string::npos) << e.what();
+    }
+  }
+}

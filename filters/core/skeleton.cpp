@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -29,6 +30,28 @@ Json::Value parseJsonText(const std::string& text) {
   return root;
 }
 
+// Valid UTF-8 without control characters: a name that is not would not survive being written back
+// (the JSON writer replaces invalid bytes), so a case's joints would no longer match its poses.
+bool isPrintableUtf8(const std::string& text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 || c == 0x7f) return false;
+    const int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xe ? 2 : (c >> 3) == 0x1e ? 3 : -1;
+    if (extra < 0 || i + std::size_t(extra) >= text.size() + (extra == 0)) return false;  // lead byte, length
+    std::uint32_t code = extra == 0 ? c : c & (0x3f >> extra);
+    for (int k = 1; k <= extra; ++k) {
+      const unsigned char d = static_cast<unsigned char>(text[i + std::size_t(k)]);
+      if ((d >> 6) != 0x2) return false;
+      code = (code << 6) | (d & 0x3f);
+    }
+    // Overlong forms, surrogates and code points beyond Unicode are not UTF-8.
+    static const std::uint32_t least[4] = {0, 0x80, 0x800, 0x10000};
+    if (code < least[extra] || (code >= 0xd800 && code <= 0xdfff) || code > 0x10ffff) return false;
+    i += std::size_t(extra) + 1;
+  }
+  return true;
+}
+
 // A joint as read, before parent names are resolved.
 struct RawJoint {
   Joint joint;
@@ -42,6 +65,8 @@ RawJoint readJoint(const Json::Value& value, Json::ArrayIndex index) {
     fail("joint #" + std::to_string(index) + " has no \"name\" string");
   raw.joint.name = value["name"].asString();
   const std::string& name = raw.joint.name;
+  if (!isPrintableUtf8(name))
+    fail("joint #" + std::to_string(index) + "'s name is not text (invalid UTF-8 or a control character)");
 
   const Json::Value& parent = value["parent"];  // null when absent
   if (!parent.isNull()) {
