@@ -280,8 +280,10 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
   }
   catch (const itk::ExceptionObject& e)
   {
+    // ITK's description runs over lines and names the temporary file: the cause, when known, says more.
+    const std::string known = repose::knownWriteFailure(tmpFile.string(), errno);
     pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
-    return fail(e.GetDescription());
+    return fail(known.empty() ? e.GetDescription() : known);
   }
   catch (const std::exception& e)
   {

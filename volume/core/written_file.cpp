@@ -53,7 +53,7 @@ std::string errorText(int err) {
 
 }  // namespace
 
-std::string writeFailureReason(const std::string& path, int err) {
+std::string knownWriteFailure(const std::string& path, int err) {
   if (tellsWhy(err)) return errorText(err);
   fs::path dir = fs::path(path).parent_path();
   if (dir.empty()) dir = ".";
@@ -62,7 +62,12 @@ std::string writeFailureReason(const std::string& path, int err) {
   struct rlimit limit{};
   if (::getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && sizeOrZero(path) >= limit.rlim_cur)
     return errorText(EFBIG);
-  return "the file is incomplete";
+  return "";
+}
+
+std::string writeFailureReason(const std::string& path, int err) {
+  const std::string known = knownWriteFailure(path, err);
+  return known.empty() ? "the file is incomplete" : known;
 }
 
 void throwWriteFailure(const std::string& name, const std::string& path, int err) {

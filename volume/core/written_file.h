@@ -9,8 +9,10 @@
 
 namespace repose {
 
-/// Why writing `path` failed: strerror(err) when the writer left a telling errno, else what the
-/// file system says (no space left, the file-size limit reached), else "the file is incomplete".
+/// Why writing `path` failed, when known: strerror(err) when the writer left a telling errno, else
+/// what the file system says (no space left, the file-size limit reached); "" otherwise.
+std::string knownWriteFailure(const std::string& path, int err);
+/// knownWriteFailure, or "the file is incomplete".
 std::string writeFailureReason(const std::string& path, int err);
 
 /// "NAME: cannot write (REASON)"; `reason` alone for writers that word their own messages.
