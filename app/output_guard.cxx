@@ -50,7 +50,7 @@ void refuseOutputsOverInputs(const std::string& outDir, const std::vector<std::s
     for (const std::string& name : outputNames) {
       const fs::path target = fs::path(outDir.empty() ? "." : outDir) / name;
       // An output folder (frames/) is replaced whole: an input inside it would go with it.
-      if (within(in, canonicalOf(target)) || sameFile(target, file)) refuse(outDir, "would replace the input", file);
+      if (within(in, canonicalOf(target)) || sameFile(target, file)) refuse(target.string(), "would replace the input", file);
     }
   }
 }

@@ -14,8 +14,8 @@ struct CommandInputs {
   std::vector<std::string> folders;  ///< read folders, such as a case
 };
 
-/// Throws std::runtime_error "OUT: --out would replace the input IN; choose another --out" (or
-/// "is the input folder IN", "lies inside the input folder IN") when writing `outputNames` into
+/// Throws std::runtime_error "OUT/NAME: --out would replace the input IN; choose another --out" (or
+/// "OUT: --out is the input folder IN", "... lies inside the input folder IN") when writing `outputNames` into
 /// `outDir` would replace or enter an input.
 void refuseOutputsOverInputs(const std::string& outDir, const std::vector<std::string>& outputNames,
                              const CommandInputs& inputs);
