@@ -281,7 +281,8 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
   catch (const itk::ExceptionObject& e)
   {
     // ITK's description runs over lines and names the temporary file: the cause, when known, says more.
-    const std::string known = repose::knownWriteFailure(tmpFile.string(), errno);
+    const int err = errno;
+    const std::string known = repose::knownWriteFailure(tmpFile.string(), repose::isStorageError(err) ? err : 0);
     pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
     return fail(known.empty() ? e.GetDescription() : known);
   }

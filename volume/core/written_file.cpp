@@ -53,6 +53,10 @@ std::string errorText(int err) {
 
 }  // namespace
 
+bool isStorageError(int err) {
+  return err == ENOSPC || err == EDQUOT || err == EFBIG || err == EIO || err == EROFS;
+}
+
 std::string knownWriteFailure(const std::string& path, int err) {
   if (tellsWhy(err)) return errorText(err);
   fs::path dir = fs::path(path).parent_path();

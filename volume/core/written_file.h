@@ -12,6 +12,9 @@ namespace repose {
 /// Why writing `path` failed, when known: strerror(err) when the writer left a telling errno, else
 /// what the file system says (no space left, the file-size limit reached); "" otherwise.
 std::string knownWriteFailure(const std::string& path, int err);
+/// True for the errors of the storage itself (no space, quota, file too large, I/O, read-only),
+/// which an errno left by a library that failed for another reason rarely is.
+bool isStorageError(int err);
 /// knownWriteFailure, or "the file is incomplete".
 std::string writeFailureReason(const std::string& path, int err);
 
