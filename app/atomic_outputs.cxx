@@ -1,27 +1,107 @@
 #include "atomic_outputs.h"
 
+#include "written_file.h"
+
 #include <cerrno>
+#include <csignal>
 #include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
+#include <regex>
+#include <map>
 #include <sstream>
 #include <stdexcept>
+#include <sys/file.h>
 #include <unistd.h>
 
 namespace repose {
 namespace fs = std::filesystem;
 
-AtomicOutputs::AtomicOutputs(const std::string& finalDir) : finalDir_(finalDir) {
+namespace {
+
+const std::string kTempPrefix = ".repose-tmp-";
+
+/// The temporary folders of this process's live AtomicOutputs, guarded so that a commit and the
+/// signal handler's removal never interleave.
+std::mutex& registryMutex() {
+  static std::mutex m;
+  return m;
+}
+/// Temporary folder -> (final folder, outermost folder created for it or "").
+std::map<std::string, std::pair<std::string, std::string>>& registry() {
+  static std::map<std::string, std::pair<std::string, std::string>> folders;
+  return folders;
+}
+
+/// Removes `dir` and its parents up to `root` while they are empty (fs::remove leaves a full one).
+void removeEmptyUpTo(const fs::path& dir, const fs::path& root) {
+  if (root.empty()) return;
+  std::error_code ec;
+  for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
+    if (!fs::remove(p, ec) || p == root) return;
+  }
+}
+
+/// The outermost missing folder on the way to `dir` ("" when it exists).
+std::string firstMissing(const fs::path& dir) {
+  std::error_code ec;
+  fs::path missing;
+  for (fs::path p = fs::absolute(dir).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path())
+    missing = p;
+  return missing.string();
+}
+
+void removeWithRetries(const std::string& dir) {
+  // Writer threads may still create files in it; a few passes empty it.
+  std::error_code ec;
+  for (int pass = 0; pass < 20 && fs::exists(dir, ec); ++pass) fs::remove_all(dir, ec);
+}
+
+/// The pid in ".repose-tmp-<pid>[-...]", or 0.
+pid_t pidOf(const std::string& name) {
+  if (name.compare(0, kTempPrefix.size(), kTempPrefix) != 0) return 0;
+  std::size_t i = kTempPrefix.size(), end = i;
+  while (end < name.size() && std::isdigit(static_cast<unsigned char>(name[end]))) ++end;
+  if (end == i || end - i > 9 || (end < name.size() && name[end] != '-')) return 0;
+  return static_cast<pid_t>(std::stol(name.substr(i, end - i)));
+}
+
+bool processAlive(pid_t pid) { return ::kill(pid, 0) == 0 || errno == EPERM; }
+
+/// True when no process holds the folder's lock (a live run in another pid namespace or on another
+/// host of a network file system does).
+bool lockIsFree(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return true;  // not a folder: a temporary file of the image writer
+  const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+  ::close(fd);
+  return free;
+}
+
+}  // namespace
+
+AtomicOutputs::AtomicOutputs(const std::string& finalDir) : finalDir_(finalDir), createdRoot_(firstMissing(finalDir)) {
   makeDirectories(finalDir_);
-  tempDir_ = (fs::path(finalDir_) / (".repose-tmp-" + std::to_string(::getpid()))).string();
+  removeStaleTemporaryFolders(finalDir_);
+  tempDir_ = (fs::path(finalDir_) / (kTempPrefix + std::to_string(::getpid()))).string();
   std::error_code ec;
   fs::remove_all(tempDir_, ec);
   makeDirectories(tempDir_);
+  lockFd_ = ::open(tempDir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (lockFd_ >= 0) ::flock(lockFd_, LOCK_EX | LOCK_NB);
+  std::lock_guard<std::mutex> lock(registryMutex());
+  registry()[tempDir_] = {finalDir_, createdRoot_};
 }
 
 AtomicOutputs::~AtomicOutputs() {
+  std::lock_guard<std::mutex> lock(registryMutex());
+  registry().erase(tempDir_);
   std::error_code ec;
   fs::remove_all(tempDir_, ec);
+  if (lockFd_ >= 0) ::close(lockFd_);
+  if (!committed_) removeEmptyUpTo(fs::absolute(finalDir_).lexically_normal(), createdRoot_);
 }
 
 std::string AtomicOutputs::stage(const std::string& name) const {
@@ -29,6 +109,9 @@ std::string AtomicOutputs::stage(const std::string& name) const {
 }
 
 void AtomicOutputs::commit() {
+  std::lock_guard<std::mutex> lock(registryMutex());
+  for (const auto& entry : fs::directory_iterator(tempDir_))
+    requireWritten((fs::path(finalDir_) / entry.path().filename()).string(), entry.path().string());
   for (const auto& entry : fs::directory_iterator(tempDir_)) {
     const fs::path target = fs::path(finalDir_) / entry.path().filename();
     std::error_code ec;
@@ -37,6 +120,36 @@ void AtomicOutputs::commit() {
     if (ec) throw std::runtime_error(target.string() + ": cannot write (" + ec.message() + ")");
   }
   committed_ = true;
+  syncFolder(finalDir_);  // the renames themselves reach the disk
+}
+
+std::vector<std::string> removeTemporaryFolders() {
+  std::lock_guard<std::mutex> lock(registryMutex());
+  std::vector<std::string> finalDirs;
+  for (const auto& [dir, final] : registry()) {
+    removeWithRetries(dir);
+    removeEmptyUpTo(fs::absolute(final.first).lexically_normal(), final.second);
+    finalDirs.push_back(final.first);
+  }
+  registry().clear();
+  return finalDirs;
+}
+
+int removeStaleTemporaryFolders(const std::string& dir) {
+  int removed = 0;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const pid_t pid = pidOf(entry.path().filename().string());
+    if (pid <= 0 || pid == ::getpid() || processAlive(pid) || !lockIsFree(entry.path())) continue;
+    std::error_code rec;
+    removed += fs::remove_all(entry.path(), rec) > 0 ? 1 : 0;
+  }
+  return removed;
+}
+
+std::string withFinalPaths(std::string message) {
+  static const std::regex temp("\\.repose-tmp-[0-9]+/");
+  return std::regex_replace(message, temp, "");
 }
 
 void makeDirectories(const std::string& dir) {
@@ -55,9 +168,12 @@ std::string readTextFile(const std::string& path) {
 }
 
 void writeTextFile(const std::string& path, const std::string& text) {
+  errno = 0;
   std::ofstream out(path, std::ios::binary);
   out << text;
-  if (!out) throw std::runtime_error(path + ": cannot write");
+  out.close();  // the last buffer is written here: a full disk shows only now
+  if (!out) throwWriteFailure(path, path, errno);
+  requireWritten(path, path, text.size());
 }
 
 bool fileExists(const std::string& path) { return fs::exists(path); }

@@ -1,4 +1,5 @@
 #include "fidelity_plot.h"
+#include "checked_write.h"
 
 #include <stdexcept>
 
@@ -58,8 +59,7 @@ void plotVolumeRatios(const std::map<std::string, std::vector<std::pair<double, 
   vtkNew<vtkPNGWriter> writer;
   writer->SetFileName(pngPath.c_str());
   writer->SetInputConnection(grab->GetOutputPort());
-  writer->Write();
-  if (writer->GetErrorCode() != 0) throw std::runtime_error(pngPath + ": cannot write picture");
+  writeChecked(writer.Get(), pngPath, kPngTail);
 }
 
 }  // namespace repose

@@ -1,4 +1,5 @@
 #include "mesh_io.h"
+#include "checked_write.h"
 
 #include <algorithm>
 #include <cctype>
@@ -97,41 +98,39 @@ vtkSmartPointer<vtkPolyData> readSurfaceMesh(const std::string& path) {
 
 void writeSurfaceMesh(vtkPolyData* mesh, const std::string& path) {
   const std::string ext = lowerExtension(path);
-  int ok = 0;
   if (ext == ".obj") {
     auto w = vtkSmartPointer<vtkOBJWriter>::New();
     w->SetFileName(path.c_str());
     w->SetInputData(mesh);
-    ok = w->Write();
+    writeChecked(w.Get(), path, "");
   } else if (ext == ".stl") {
     auto w = vtkSmartPointer<vtkSTLWriter>::New();
     w->SetFileName(path.c_str());
     w->SetInputData(mesh);
     w->SetFileTypeToBinary();
-    ok = w->Write();
+    writeChecked(w.Get(), path, "");
   } else if (ext == ".ply") {
     auto w = vtkSmartPointer<vtkPLYWriter>::New();
     w->SetFileName(path.c_str());
     w->SetInputData(mesh);
     w->SetFileTypeToBinary();
-    ok = w->Write();
+    writeChecked(w.Get(), path, "");
   } else if (ext == ".vtp") {
     auto w = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
     w->SetFileName(path.c_str());
     w->SetInputData(mesh);
     w->SetDataModeToAppended();
     w->EncodeAppendedDataOff();
-    ok = w->Write();
+    writeChecked(w.Get(), path, kVtkXmlTail);
   } else if (ext == ".vtk") {
     auto w = vtkSmartPointer<vtkPolyDataWriter>::New();
     w->SetFileName(path.c_str());
     w->SetInputData(mesh);
     w->SetFileTypeToBinary();
-    ok = w->Write();
+    writeChecked(w.Get(), path, "");
   } else {
     throw std::runtime_error(path + ": unknown surface format (expected .obj, .stl, .ply, .vtp or .vtk)");
   }
-  if (!ok) throw std::runtime_error(path + ": cannot write surface mesh");
 }
 
 }  // namespace repose

@@ -1,4 +1,5 @@
 #include "render_snapshot.h"
+#include "checked_write.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -121,8 +122,7 @@ void renderSideBySide(vtkPolyData* left, vtkPolyData* right, const std::vector<i
   auto writer = vtkSmartPointer<vtkPNGWriter>::New();
   writer->SetFileName(pngPath.c_str());
   writer->SetInputConnection(grab->GetOutputPort());
-  writer->Write();
-  if (writer->GetErrorCode() != 0) throw std::runtime_error(pngPath + ": cannot write picture");
+  writeChecked(writer.Get(), pngPath, kPngTail);
 }
 
 }  // namespace repose

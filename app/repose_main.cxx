@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <memory>
 #include <cstdlib>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <iomanip>
@@ -33,6 +34,8 @@
 #include "vtkReposePhantomSource.h"
 
 #include "atomic_outputs.h"
+#include "interrupt_cleanup.h"
+#include "output_guard.h"
 #include "batch_command.h"
 #include "deformation_stats.h"
 #include "fidelity_plot.h"
@@ -496,10 +499,12 @@ int runRig(const Options& o) {
   if (o.help) return std::cout << kRigUsage, 0;
   const std::string labelsPath = o.require("labels");
   const std::string outPath = o.require("out");
-  auto labels = repose::readLabelVolume(labelsPath);
-  const RigResult r = rigLabels(labels, labelsPath, o);
   const std::filesystem::path out(outPath);
   const std::string dir = out.has_parent_path() ? out.parent_path().string() : ".";
+  repose::refuseOutputsOverInputs(dir, {out.filename().string(), "labels_rigged.nii.gz", "labels_rigged.tsv"},
+                                  {{labelsPath, o.get("label-table")}, {}});
+  auto labels = repose::readLabelVolume(labelsPath);
+  const RigResult r = rigLabels(labels, labelsPath, o);
   repose::AtomicOutputs files(dir);
   repose::writeTextFile(files.stage(out.filename().string()), r.skeletonJson);
   if (r.relabelled) {
@@ -547,6 +552,10 @@ int runPrepare(const Options& o) {
   const std::string labelsPath = o.require("labels");
   const std::string skeletonPath = o.require("skeleton");
   const std::string caseDir = o.require("out");
+  std::string ext = repose::imageExtension(labelsPath);
+  if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha") ext = ".nii.gz";
+  repose::refuseOutputsOverInputs(caseDir, repose::Pipeline::caseFileNames(ext),
+                                  {{labelsPath, skeletonPath, o.get("image"), o.get("label-table")}, {}});
   repose::Pipeline pipeline;
   pipeline.setProgress([](const std::string& s) { std::cout << "prepare: " << s << "..." << std::endl; });
   vtkSmartPointer<vtkImageData> labels = repose::readLabelVolume(labelsPath);
@@ -564,8 +573,6 @@ int runPrepare(const Options& o) {
   }
   vtkSmartPointer<vtkImageData> image;
   if (o.has("image")) image = repose::readIntensityImage(o.get("image"));
-  std::string ext = repose::imageExtension(labelsPath);
-  if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha") ext = ".nii.gz";
   pipeline.setLabelTableTsv(tableTsv);
   prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath == "auto" ? "automatic skeleton" : skeletonPath,
               image, o.get("image"), o, caseDir, ext);
@@ -740,6 +747,22 @@ void writePosedVdb(repose::Pipeline& pipeline, repose::AtomicOutputs& out, doubl
   }
 }
 
+/// Every file `pose` may write (each format's posed volumes), so that none can replace an input.
+std::vector<std::string> poseOutputNames(const std::vector<std::string>& meshes) {
+  std::vector<std::string> names = {"posed_mesh.vtu", "posed_surfaces.vtp", "fidelity.csv", "fidelity.png"};
+  for (const char* ext : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".raw.gz", ".mha", ".mhd", ".raw", ".zraw", ".vdb"})
+    for (const char* stem : {"posed_labels", "posed_image"}) names.push_back(stem + std::string(ext));
+  for (const std::string& mesh : meshes) names.push_back(repose::posedMeshName(mesh));
+  return names;
+}
+
+/// The files named by the options `names`, and every --mesh.
+std::vector<std::string> inputFiles(const Options& o, const std::vector<std::string>& names) {
+  std::vector<std::string> files = o.all("mesh");
+  for (const std::string& n : names) files.push_back(o.get(n));
+  return files;
+}
+
 bool isVdbFormat(const std::string& format) { return format == "vdb" || format == ".vdb"; }
 
 int runPose(const Options& o, int argc, char** argv) {
@@ -748,6 +771,7 @@ int runPose(const Options& o, int argc, char** argv) {
   const std::string caseDir = o.require("case");
   const std::string posePath = o.require("pose");
   const std::string outDir = o.require("out");
+  repose::refuseOutputsOverInputs(outDir, poseOutputNames(o.all("mesh")), {inputFiles(o, {"pose", "image"}), {caseDir}});
   repose::Pipeline pipeline;
   pipeline.loadCase(caseDir);
   pipeline.setPose(repose::readTextFile(posePath), posePath);
@@ -920,6 +944,8 @@ int runAnimate(const Options& o, int argc, char** argv) {
   const std::string caseDir = o.require("case");
   const std::string bvhPath = o.require("bvh");
   const std::string outDir = o.require("out");
+  repose::refuseOutputsOverInputs(outDir, {"frames", "animation.pvd", "frames.csv", "fidelity.csv", "fidelity.png"},
+                                  {inputFiles(o, {"bvh", "map", "image"}), {caseDir}});
   const std::string relaxStart = o.get("relax-start", "previous");
   if (relaxStart != "previous" && relaxStart != "skinned") throw UsageError("--relax-start must be previous or skinned");
   if (o.has("relax-start") && !o.has("relax") && !o.has("compare"))
@@ -1161,6 +1187,8 @@ private:
 }  // namespace
 
 int main(int argc, char** argv) {
+  repose::cleanUpOnInterrupt();
+  std::signal(SIGXFSZ, SIG_IGN);  // past `ulimit -f` a write fails (EFBIG) and is reported, no core dump
   vtkNew<QuietOutputWindow> quiet;
   vtkOutputWindow::SetInstance(quiet);
   if (!std::getenv("REPOSE_VERBOSE")) vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
@@ -1209,7 +1237,7 @@ int main(int argc, char** argv) {
     std::cerr << "repose: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
-    std::string msg = e.what();
+    std::string msg = repose::withFinalPaths(e.what());
     for (char& c : msg)
       if (c == '\n') c = ' ';
     std::cerr << "repose: error: " << msg << "\n";

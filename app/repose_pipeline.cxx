@@ -41,6 +41,7 @@
 #include "vtkReposeSurfaceExtractor.h"
 
 #include "atomic_outputs.h"
+#include "checked_write.h"
 #include "pose.h"
 #include "skeleton.h"
 #include "deformation_stats.h"
@@ -151,6 +152,7 @@ vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path) {
 }
 
 void writeImage(vtkImageData* image, const std::string& path) {
+  const QuietStderr quiet;
   auto writer = vtkSmartPointer<vtkReposeImageWriter>::New();
   writer->SetFileName(path.c_str());
   writer->SetInputData(image);
@@ -166,7 +168,7 @@ void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path) {
   writer->SetInputData(mesh);
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
-  if (!writer->Write()) throw std::runtime_error(path + ": cannot write mesh");
+  writeChecked(writer.Get(), path, kVtkXmlTail);
 }
 
 void writeSurfaces(vtkPolyData* surfaces, const std::string& path) {
@@ -175,7 +177,7 @@ void writeSurfaces(vtkPolyData* surfaces, const std::string& path) {
   writer->SetInputData(surfaces);
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
-  if (!writer->Write()) throw std::runtime_error(path + ": cannot write surfaces");
+  writeChecked(writer.Get(), path, kVtkXmlTail);
 }
 
 void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
@@ -344,6 +346,10 @@ std::string Pipeline::genericCaseTable() const {
   values.assign(seen.begin(), seen.end());
   for (const Joint& j : parseSkeletonJson(skeletonJson_).joints) bones.insert(bones.end(), j.labels.begin(), j.labels.end());
   return labelTableToTsv(genericLabelTable(values, bones));
+}
+
+std::vector<std::string> Pipeline::caseFileNames(const std::string& labelsExtension) {
+  return {"mesh.vtu", "surfaces.vtp", "skeleton.json", "labels" + labelsExtension, "labels.tsv", "manifest.json"};
 }
 
 void Pipeline::saveCase(const std::string& caseDir, const std::string& labelsExtension) const {

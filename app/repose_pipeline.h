@@ -88,6 +88,8 @@ public:
   /// setLabelTableTsv(), or else one naming every label value label_<value> (bone when the skeleton
   /// uses it): value<TAB>name<TAB>kind lines with a header, plus r g b a columns when colours are known.
   void saveCase(const std::string& caseDir, const std::string& labelsExtension = ".nii.gz") const;
+  /// The files saveCase writes into the case folder.
+  static std::vector<std::string> caseFileNames(const std::string& labelsExtension);
   /// Throws std::runtime_error naming the missing or broken file. Cases saved before the label
   /// table was kept load too (labelTableTsv() is then empty).
   void loadCase(const std::string& caseDir);

@@ -23,6 +23,7 @@
 #include <vtkUnstructuredGrid.h>
 
 #include "atomic_outputs.h"
+#include "output_guard.h"
 #include "auto_rig.h"
 #include "label_table.h"
 #include "mesh_io.h"
@@ -172,6 +173,21 @@ std::string tablePathFor(const std::string& out) {
   return out.substr(0, out.size() - ext.size()) + ".tsv";
 }
 
+/// The image, its label table and the skeleton must not replace a mesh or the reference read.
+void refuseOutputsOverOwnInputs(const Args& a, const std::string& outPath) {
+  namespace fs = std::filesystem;
+  CommandInputs inputs;
+  for (const char* n : {"skin", "reference"})
+    if (a.single.count(n)) inputs.files.push_back(a.single.at(n));
+  for (const auto& [option, value] : a.repeated) inputs.files.push_back(value.substr(value.find('=') + 1));
+  auto check = [&](const fs::path& file, std::vector<std::string> names) {
+    refuseOutputsOverInputs(file.has_parent_path() ? file.parent_path().string() : ".", names, inputs);
+  };
+  const fs::path out(outPath);
+  check(out, {out.filename().string(), fs::path(tablePathFor(outPath)).filename().string()});
+  if (a.single.count("skeleton-out")) check(a.single.at("skeleton-out"), {fs::path(a.single.at("skeleton-out")).filename().string()});
+}
+
 double seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -192,6 +208,7 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha" && ext != ".mhd" && ext != ".nhdr")
     throw VoxelizeUsageError("--out needs an image file name (.nii.gz, .nii, .nrrd, .mha), not '" + outPath + "'");
   const bool hasReference = a.single.count("reference") != 0;
+  refuseOutputsOverOwnInputs(a, outPath);
   if (!hasReference && !a.single.count("voxel")) throw VoxelizeUsageError("missing required option --voxel (or --reference)");
   const double unitMm = number(a, "unit-mm", 1.0);
   if (!(unitMm > 0)) throw VoxelizeUsageError("--unit-mm must be positive");

@@ -17,7 +17,10 @@
 #include "itkNiftiImageIOFactory.h"
 #include "itkNrrdImageIOFactory.h"
 
+#include "written_file.h"
+
 #include <algorithm>
+#include <cerrno>
 #include <filesystem>
 #include <mutex>
 #include <stdexcept>
@@ -50,6 +53,23 @@ bool EndsWith(const std::string& s, const std::string& suffix)
   std::string tail = s.substr(s.size() - suffix.size());
   std::transform(tail.begin(), tail.end(), tail.begin(), [](unsigned char c) { return std::tolower(c); });
   return tail == suffix;
+}
+
+/// Bytes of a file, or of all the files of a folder (a header and its data file).
+std::uintmax_t DataBytes(const fs::path& path)
+{
+  std::error_code ec;
+  if (!fs::is_directory(path, ec))
+  {
+    const std::uintmax_t n = fs::file_size(path, ec);
+    return ec ? 0 : n;
+  }
+  std::uintmax_t total = 0;
+  for (const auto& entry : fs::directory_iterator(path, ec))
+  {
+    total += DataBytes(entry.path());
+  }
+  return total;
 }
 
 template <class T>
@@ -216,8 +236,7 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
   {
     return fail("input scalars must have one component (or three floats: a vector field)");
   }
-  // Single files are compressed where the format allows it (gzip NIfTI, zlib MetaImage, gzip NRRD).
-  const bool compress = EndsWith(target, ".nii.gz") || EndsWith(target, ".mha") || EndsWith(target, ".nrrd");
+  const bool compress = EndsWith(target, ".nii.gz");
   const bool pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
   const bool vti = EndsWith(target, ".vti");
   if (!(compress || pair || vti || EndsWith(target, ".nii") || EndsWith(target, ".nrrd") || EndsWith(target, ".mha")))
@@ -249,6 +268,7 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
     {
       fs::create_directory(tmpDir);
     }
+    errno = 0;
     if (vti)
     {
       WriteVti(input, tmpFile.string());
@@ -257,10 +277,25 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
     {
       WriteByType(input, tmpFile.string(), compress);
     }
-    // Some ITK writers (NIfTI) report failures on stderr only.
+    // ITK's NIfTI writer reports short writes on stderr only: the file is read back to its last byte.
+    const std::uintmax_t voxelBytes = std::uintmax_t(input->GetNumberOfPoints()) *
+      std::uintmax_t(input->GetScalarSize()) * std::uintmax_t(components);
     if (!fs::exists(tmpFile))
     {
-      throw std::runtime_error("the image writer produced no file (directory not writable or disk full?)");
+      repose::throwWriteFailure(target, tmpFile.string(), errno);
+    }
+    if (compress)
+    {
+      repose::requireCompleteGzip(target, tmpFile.string(), voxelBytes);
+    }
+    repose::requireWritten(target, pair ? tmpDir.string() : tmpFile.string(), 1);
+    if (vti)
+    {
+      repose::requireEndsWith(target, tmpFile.string(), "</VTKFile>\n");
+    }
+    else if (!compress && DataBytes(pair ? tmpDir : tmpFile) < voxelBytes)
+    {
+      repose::throwWriteFailure(target, tmpFile.string());
     }
     if (pair)
     {
@@ -275,10 +310,18 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
       fs::rename(tmpFile, finalPath);
     }
   }
-  catch (const itk::ExceptionObject& e)
+  catch (const repose::WriteFailure& e)
   {
     pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
-    return fail(e.GetDescription());
+    return fail(e.reason);
+  }
+  catch (const itk::ExceptionObject& e)
+  {
+    // ITK's description runs over lines and names the temporary file: the cause, when known, says more.
+    const int err = errno;
+    const std::string known = repose::knownWriteFailure(tmpFile.string(), repose::isStorageError(err) ? err : 0);
+    pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
+    return fail(known.empty() ? e.GetDescription() : known);
   }
   catch (const std::exception& e)
   {

@@ -242,3 +242,34 @@ def enclosed_background(a):
     border = set(np.unique(np.concatenate([comp[0].ravel(), comp[-1].ravel(), comp[:, 0].ravel(),
                                            comp[:, -1].ravel(), comp[:, :, 0].ravel(), comp[:, :, -1].ravel()])))
     return np.isin(comp, [c for c in range(1, n + 1) if c not in border]).sum()
+
+
+def file_hashes(*roots):
+    """SHA-256 of every file under the roots (files or folders), by path: inputs before and after."""
+    import hashlib
+    hashes = {}
+    for root in roots:
+        paths = [root] if os.path.isfile(root) else [os.path.join(d, f) for d, _, fs in os.walk(root) for f in fs]
+        for p in paths:
+            with open(p, "rb") as f:
+                hashes[p] = hashlib.sha256(f.read()).hexdigest()
+    return hashes
+
+
+def run_file_size_limited(limit_bytes, *args):
+    """Runs the CLI with RLIMIT_FSIZE set (prlimit, no Python between fork and exec): a write past
+    the limit fails with EFBIG, as on a full disk, without root or a small file system."""
+    p = subprocess.run(["prlimit", f"--fsize={limit_bytes}", EXE, *map(str, args)], capture_output=True, text=True)
+    return p.returncode, p.stdout, p.stderr
+
+
+def check_failed_cleanly(result, message, gone, failures, what):
+    """A refused or failed run: exit code 1, one stderr line `repose: error: ...` containing
+    `message`, and none of the paths in `gone` left (outputs, temporary folders)."""
+    code, _, err = result
+    lines = err.strip().splitlines()
+    check(code == 1, f"{what}: exit code 1 (got {code})", failures)
+    check(len(lines) == 1 and lines[0].startswith("repose: error: ") and message in lines[0],
+          f"{what}: one line with {message!r} (got {err.strip()!r})", failures)
+    for path in gone:
+        check(not os.path.exists(path), f"{what}: nothing left in {os.path.basename(path)}", failures)

@@ -1,4 +1,5 @@
 #include "vdb_volume_writer.h"
+#include "written_file.h"
 
 #include <chrono>
 #include <cstdio>
@@ -68,6 +69,10 @@ void writeGrids(const openvdb::GridPtrVec& grids, const std::string& path) {
     openvdb::io::File file(temp);
     file.write(grids);
     file.close();
+    requireWritten(path, temp);  // OpenVDB's stream can lose a short write on a full disk
+  } catch (const WriteFailure&) {
+    std::remove(temp.c_str());
+    throw;
   } catch (const std::exception& e) {
     std::remove(temp.c_str());
     throw std::runtime_error(path + ": cannot write OpenVDB file (" + e.what() + ")");

@@ -1,0 +1,43 @@
+#pragma once
+// VTK writers checked to the last byte. A writer can meet a full disk and still return 1 (its
+// std::ofstream loses the last buffer on close), so besides Write()'s result and the error code
+// the file must end with the bytes its format ends with, and be flushed to the disk.
+#include <cerrno>
+#include <string>
+#include <type_traits>
+
+namespace repose {
+
+/// The last bytes of a VTK XML file and of a PNG picture (its IEND chunk).
+extern const std::string kVtkXmlTail, kPngTail;
+
+/// Throws WriteFailure "PATH: cannot write (REASON)" unless the write succeeded, the file ends with
+/// `tail` ("" skips that) and it is on the disk.
+void checkWritten(int written, unsigned long errorCode, int err, const std::string& path, const std::string& tail);
+
+/// Silences stderr while it lives (unless REPOSE_VERBOSE is set): ITK's NIfTI library prints a
+/// failed write in lines of its own ("** ERROR: NWAD ..."), which the caller reports in one line.
+class QuietStderr {
+public:
+  QuietStderr();
+  ~QuietStderr();
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+private:
+  int saved_ = -1;
+};
+
+/// Runs `writer->Write()` (a VTK writer whose file name is set) and checks it as above.
+template <class Writer>
+void writeChecked(Writer* writer, const std::string& path, const std::string& tail) {
+  errno = 0;
+  int written = 1;  // vtkImageWriter::Write() returns nothing: its error code tells
+  if constexpr (std::is_void_v<decltype(writer->Write())>)
+    writer->Write();
+  else
+    written = writer->Write();
+  checkWritten(written, writer->GetErrorCode(), errno, path, tail);
+}
+
+}  // namespace repose
