@@ -120,6 +120,10 @@ TEST(Skeleton, ErrorsNameTheProblem) {
   expectSkeletonError(R"({"joints": [{"name": "a", "parent": null, "center": [0,0,0], "labels": [4]},
                                      {"name": "b", "parent": "a", "center": [0,0,0], "labels": [2, 4]}]})",
                       {"label 4", "'a'", "'b'"});
+  expectSkeletonError(R"({"joints": [{"name": "pelvis", "parent": null, "center": [0,0,0], "labels": [0]}]})",
+                      {"pelvis", "label 0", "background"});
+  expectSkeletonError(R"({"joints": [{"name": "pelvis", "parent": null, "center": [0,0,0], "labels": [3, -2]}]})",
+                      {"pelvis", "label -2"});
 }
 
 TEST(Skeleton, ReadFileErrorsNameTheFile) {

@@ -67,6 +67,10 @@ RawJoint readJoint(const Json::Value& value, Json::ArrayIndex index) {
     for (const Json::Value& l : labels) {
       if (!l.isIntegral() || !l.isInt())
         fail("joint '" + name + "': \"labels\" must be an array of integers");
+      // Label 0 is the background around the body (TetGen would refine its open surface forever).
+      if (l.asInt() <= 0)
+        fail("joint '" + name + "': label " + std::to_string(l.asInt()) +
+             " is not a bone label (labels are positive; 0 is the background)");
       raw.joint.labels.push_back(l.asInt());
     }
   }
