@@ -136,8 +136,15 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
   }
   vtkIntArray* labels = vtkIntArray::SafeDownCast(image->GetPointData()->GetScalars());
   labels->SetName("Labels");
+  // Tables indexed by label value are sized by the largest label: bound it before anyone allocates.
   bool any = false;
-  for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n && !any; ++i) any = labels->GetValue(i) != 0;
+  for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n; ++i) {
+    const int v = labels->GetValue(i);
+    if (v < 0 || v > kMaxLabelValue)
+      throw std::runtime_error(path + ": label " + std::to_string(v) + " is outside 0.." +
+                               std::to_string(kMaxLabelValue) + " (not a label volume, or a damaged one)");
+    any = any || v != 0;
+  }
   if (!any) throw std::runtime_error(path + ": empty label volume (every voxel is 0)");
   return image;
 }
@@ -239,10 +246,12 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   for (const Joint& joint : skeleton.joints) {
     if (joint.labels.empty())
       throw std::runtime_error(skeletonName + ": joint '" + joint.name + "' lists no labels (its bone has no voxels)");
-    for (int label : joint.labels)
+    for (int label : joint.labels) {
+      // Damage to the volume removes a bone as surely as a typo in the skeleton: name the volume.
       if (!present.count(label))
-        throw std::runtime_error(skeletonName + ": joint '" + joint.name + "' names label " +
-                                 std::to_string(label) + ", which " + labelsName + " does not contain");
+        throw std::runtime_error(labelsName + ": label " + std::to_string(label) + " of joint '" + joint.name +
+                                 "' in " + skeletonName + " is absent from the volume");
+    }
   }
 
   restLabels_ = labels;

@@ -6,6 +6,7 @@ packages=(
   libvtk9-dev python3-vtk9 vtk9 libvtk9-qt-dev
   libinsighttoolkit5-dev
   libeigen3-dev libjsoncpp-dev
+  zlib1g-dev  # image integrity: gzip CRC and length checked on read
   libtet1.5-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
   qtbase5-dev
