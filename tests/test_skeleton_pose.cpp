@@ -171,6 +171,17 @@ TEST(Pose, JsonRoundTrip) {
 
 TEST(Pose, ErrorsNameTheProblem) {
   expectPoseError(R"({"rotations": {)", {"malformed JSON"});
+  // Deep nesting is a parse error on one line, not a stack overflow or a message without a file.
+  expectPoseError(std::string(100000, '['), {"pose.json", "malformed JSON", "nested too deeply"});
+  expectSkeletonError(std::string(100000, '{'), {"skeleton.json", "malformed JSON"});
+  for (const std::string& broken : {std::string("{\"rotations\": {\n\n"), std::string("[1,\n2,,]")}) {
+    try {
+      repose::parsePoseJson(broken);
+      ADD_FAILURE() << "accepted " << broken;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  }
   expectPoseError(R"({"rotations": {"knee": {"axis": [0, 0, 0], "degrees": 10}}})", {"knee", "axis", "zero"});
   expectPoseError(R"({"rotations": {"knee": {"axis": [1e-20, 0, 0], "degrees": 10}}})", {"knee", "zero"});
   expectPoseError(R"({"rotations": {"knee": {"quaternion": [0, 0, 0, 0]}}})", {"knee", "quaternion", "zero"});

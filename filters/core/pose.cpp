@@ -1,5 +1,7 @@
 #include "pose.h"
 
+#include "json_text.h"
+
 #include <json/json.h>
 
 #include <cmath>
@@ -57,14 +59,12 @@ Eigen::Quaterniond readRotation(const std::string& joint, const Json::Value& r) 
 }  // namespace
 
 Pose parsePoseJson(const std::string& text) {
-  Json::CharReaderBuilder builder;
-  builder["collectComments"] = false;
-  builder["allowSpecialFloats"] = true;  // NaN/Infinity parse, so the error can say which value
-  std::unique_ptr<Json::CharReader> reader(builder.newCharReader());
   Json::Value root;
-  std::string errors;
-  if (!reader->parse(text.data(), text.data() + text.size(), &root, &errors))
-    fail("malformed JSON: " + errors);
+  try {
+    root = parseJsonText(text, true);  // NaN/Infinity parse, so the error can say which value
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
   if (!root.isObject()) fail("top level must be an object {\"rotations\": {...}, \"translation\": [x,y,z]}");
 
   Pose pose;

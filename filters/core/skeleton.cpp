@@ -1,5 +1,7 @@
 #include "skeleton.h"
 
+#include "json_text.h"
+
 #include <json/json.h>
 
 #include <algorithm>
@@ -17,16 +19,12 @@ namespace {
   throw std::invalid_argument("skeleton.json: " + message);
 }
 
-Json::Value parseJsonText(const std::string& text) {
-  Json::CharReaderBuilder builder;
-  builder["collectComments"] = false;
-  builder["allowSpecialFloats"] = true;  // NaN/Infinity parse, so the error can say which value
-  std::unique_ptr<Json::CharReader> reader(builder.newCharReader());
-  Json::Value root;
-  std::string errors;
-  if (!reader->parse(text.data(), text.data() + text.size(), &root, &errors))
-    fail("malformed JSON: " + errors);
-  return root;
+Json::Value parseSkeletonText(const std::string& text) {
+  try {
+    return parseJsonText(text, true);  // NaN/Infinity parse, so the error can say which value
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
 }
 
 // A joint as read, before parent names are resolved.
@@ -86,7 +84,7 @@ int Skeleton::find(const std::string& name) const {
 }
 
 Skeleton parseSkeletonJson(const std::string& text) {
-  const Json::Value root = parseJsonText(text);
+  const Json::Value root = parseSkeletonText(text);
   if (!root.isObject() || !root.isMember("joints") || !root["joints"].isArray())
     fail("missing \"joints\" array");
   const Json::Value& joints = root["joints"];
