@@ -262,7 +262,7 @@ void vtkReposeImageReader::Fail(const std::string& reason)
     }
   }
   const auto itkPrefix = oneLine.find("): ");
-  if (oneLine.rfind("ITK ERROR: ", 0) == 0 && itkPrefix != std::string::npos)
+  if ((oneLine.rfind("ITK ERROR: ", 0) == 0 || oneLine.rfind("itk::ERROR: ", 0) == 0) && itkPrefix != std::string::npos)
   {
     oneLine = oneLine.substr(itkPrefix + 3);
   }

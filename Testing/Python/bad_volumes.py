@@ -88,6 +88,12 @@ bad = {
     "header claims twice the slices (.nii)": put("slices.nii", edited("h", 46, dims[3] * 2)),
     "header claims 2^45 voxels": put("vast.nii.gz", edited("hhh", 42, 32000, 32000, 32000)),
     "empty file": put("empty.nii.gz", b"", False),
+    "voxel offset 1e9": put("offset.nii.gz", edited("f", 108, 1e9)),
+    "negative dimension": put("negative_dim.nii.gz", edited("h", 42, -5)),
+    "four dimensions": put("time.nii.gz", edited("hhhhhh", 40, 4, dims[1], dims[2], dims[3] // 2, 2, 1,
+                                                 data=voxels[:dims[1] * dims[2] * (dims[3] // 2) * 2 * 4])),
+    "detached NRRD without its data file": put("lost.nhdr", (nrrd_text.format("raw").rstrip("\n") +
+                                                             "\ndata file: lost.raw\n").encode()),
     "random bytes": put("random.nii.gz", np.random.default_rng(1).bytes(4096), False),
     "NRRD cut short (raw)": put("cut.nrrd", nrrd_text.format("raw").encode() + voxels[:cut]),
     "NRRD gzip data cut short": put("cut_gz.nrrd", nrrd_text.format("gzip").encode() +
@@ -123,6 +129,12 @@ bad = {
     "NaN voxel (float, NRRD)": put("nan_voxel.nrrd", nrrd_text.format("raw").replace("type: int", "type: float")
                                    .encode() + nan_labels.tobytes()),
 }
+# A header extension moves the voxels (vox_offset 368); gzip members may be concatenated.
+extended = bytearray(header)
+struct.pack_into("<f", extended, 108, 368.0)
+struct.pack_into("<4b", extended, 348, 1, 0, 0, 0)
+extended = bytes(extended) + struct.pack("<ii", 16, 6) + b"comment\0" + voxels
+members = gzip.compress(nifti[:1000], mtime=0) + gzip.compress(nifti[1000:], mtime=0)
 # A file whose damage removed a bone: it is read, but the missing bone is the volume's fault.
 gone = put("bone_gone.nii.gz", edited("h", 70, 8, data=one_bone.tobytes()))
 # The undamaged variants are read: the checks refuse damage, not formats.
@@ -130,7 +142,9 @@ good = {put("good.nii", nifti): labels, put("good.nrrd", nrrd_text.format("raw")
         put("good_gz.nrrd", nrrd_text.format("gzip").encode() + gzip.compress(voxels, mtime=0)): labels,
         put("good.mha", compressed_mha(zlib.compress(voxels))): labels,
         put("good_float.nii.gz", with_datatype(16, 32, labels.astype(np.float32))): labels,
-        put("good_wide.nii.gz", with_datatype(768, 32, labels.astype(np.uint32))): labels, gone: one_bone}
+        put("good_wide.nii.gz", with_datatype(768, 32, labels.astype(np.uint32))): labels,
+        put("good_extension.nii.gz", extended): labels, put("good_members.nii.gz", members, False): labels,
+        gone: one_bone}
 for path, expected in good.items():
     check(np.array_equal(Image(path).a.ravel(), expected), f"undamaged {os.path.basename(path)} is read", failures)
 

@@ -134,6 +134,10 @@ NiftiLayout niftiLayout(const Bytes& h) {
   };
   const std::int64_t rank = v1 ? field<std::int16_t>(h, 40, swap) : field<std::int64_t>(h, 16, swap);
   if (rank < 1 || rank > 7) throw std::runtime_error("NIfTI header has " + std::to_string(rank) + " dimensions");
+  for (int a = 1; a <= rank; ++a) {  // the NIfTI library prints its own complaint to stderr: speak first
+    const std::int64_t n = v1 ? field<std::int16_t>(h, 40 + 2 * a, swap) : field<std::int64_t>(h, 16 + 8 * a, swap);
+    if (n < 1) throw std::runtime_error("NIfTI header gives axis " + std::to_string(a - 1) + " " + std::to_string(n) + " voxels");
+  }
   for (int a = 1; a <= std::min<std::int64_t>(rank, 3); ++a) {
     const double spacing = real(76 + 4 * a, 104 + 8 * a);
     if (!std::isfinite(spacing) || spacing <= 0) {
