@@ -231,8 +231,9 @@ vtkSmartPointer<vtkPolyData> readCaseSurfaces(const std::string& path, vtkIdType
   return surfaces;
 }
 
-/// The tet mesh was made from the label volume: its nodes lie within the volume's box (a voxel of
-/// margin). A case whose labels were swapped for another scan's is refused.
+/// The tet mesh was made from the label volume: its nodes lie within the volume's box, give or take
+/// the meshing grid's coarser voxels (a quarter of the box, and three voxels, of margin). A case
+/// whose labels lie elsewhere than its mesh (another scan's, or a moved grid) is refused.
 void checkMeshOnGrid(vtkPointSet* mesh, const std::string& meshPath, vtkImageData* labels,
                      const std::string& labelsPath) {
   int dims[3];
@@ -247,7 +248,8 @@ void checkMeshOnGrid(vtkPointSet* mesh, const std::string& meshPath, vtkImageDat
     labels->TransformContinuousIndexToPhysicalPoint(ijk, xyz);
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], xyz[a]), hi[a] = std::max(hi[a], xyz[a]);
   }
-  const double margin = 1.01 * std::max({spacing[0], spacing[1], spacing[2]});
+  const double margin = 0.25 * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) +
+                        3 * std::max({spacing[0], spacing[1], spacing[2]});
   double b[6];
   mesh->GetBounds(b);
   for (int a = 0; a < 3; ++a)

@@ -206,6 +206,11 @@ TEST(Pose, ValidateNamesUnknownJoint) {
   repose::Pose bad;
   bad.rotations["hand"] = Eigen::Quaterniond(NAN, 0, 0, 0);
   expectError([&] { repose::validatePose(bad, s); }, {"'hand'"});
+  repose::Pose far;
+  far.translation = Eigen::Vector3d(0, 1e300, 0);  // finite, but posed nodes would not be
+  expectError([&] { repose::validatePose(far, s); }, {"translation", "1e+300", "millimetres"});
+  far.translation = Eigen::Vector3d(0, -0.99e6, 5);  // within a kilometre
+  repose::validatePose(far, s);
   expectError([] { repose::readPoseFile("/nonexistent/pose.json"); }, {"/nonexistent/pose.json", "cannot read"});
 }
 

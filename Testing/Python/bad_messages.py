@@ -49,6 +49,8 @@ cases = [
     ("pose nested 100000 deep", ["pose", "--case", case, "--pose"], put("deep_pose.json", "[" * 100000)),
     ("pose with a translation of 1e999", ["pose", "--case", case, "--pose"],
      put("inf_translation.json", '{"rotations": {}, "translation": [1e999, 0, 0]}')),
+    ("pose with a translation of 1e300 mm", ["pose", "--case", case, "--pose"],
+     put("far_translation.json", '{"rotations": {}, "translation": [1e300, 0, 0]}')),
     ("BVH root position 1e308", animate, put("far.bvh", bvh_with("1e308", 0))),
     ("BVH rotation 1e308 degrees", animate, put("spin.bvh", bvh_with("1e308", 5))),
     ("BVH value nan", animate, put("nan.bvh", bvh_with("nan", 4))),

@@ -146,6 +146,13 @@ void validatePose(const Pose& pose, const Skeleton& skeleton) {
   }
   if (!pose.translation.allFinite())
     throw std::invalid_argument("pose translation is not finite");
+  // Beyond a kilometre float32 node coordinates lose sub-millimetre precision and no body moves so far.
+  if (pose.translation.cwiseAbs().maxCoeff() > kMaxTranslationMm) {
+    std::ostringstream why;
+    why << "pose translation (" << pose.translation.x() << ", " << pose.translation.y() << ", "
+        << pose.translation.z() << ") mm is beyond " << kMaxTranslationMm << " mm (translations are in millimetres)";
+    throw std::invalid_argument(why.str());
+  }
 }
 
 std::vector<Eigen::Isometry3d> forwardKinematics(const Skeleton& skeleton, const Pose& pose) {
