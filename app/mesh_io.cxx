@@ -1,6 +1,8 @@
 #include "mesh_io.h"
 #include "checked_write.h"
 
+#include "mesh_file_claims.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -9,6 +11,7 @@
 
 #include <vtkCellArray.h>
 #include <vtkDataArray.h>
+#include <vtkIdList.h>
 #include <vtkPoints.h>
 #include <vtkOBJReader.h>
 #include <vtkOBJWriter.h>
@@ -51,6 +54,24 @@ vtkSmartPointer<vtkPolyData> runReader(const std::string& path) {
 
 }  // namespace
 
+void checkMeshContents(vtkPointSet* mesh) {
+  // An array's range skips NaN: look at every coordinate.
+  vtkDataArray* points = mesh->GetPoints()->GetData();
+  const vtkIdType n = mesh->GetNumberOfPoints();
+  for (vtkIdType i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(points->GetComponent(i, c)))
+        throw std::runtime_error("vertex " + std::to_string(i) + " has a non-finite coordinate");
+  auto ids = vtkSmartPointer<vtkIdList>::New();
+  for (vtkIdType c = 0, cells = mesh->GetNumberOfCells(); c < cells; ++c) {
+    mesh->GetCellPoints(c, ids);
+    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
+      if (ids->GetId(k) < 0 || ids->GetId(k) >= n)
+        throw std::runtime_error("cell " + std::to_string(c) + " names point " + std::to_string(ids->GetId(k)) +
+                                 ", the mesh has " + std::to_string(n));
+  }
+}
+
 bool isSurfaceMeshPath(const std::string& path) {
   const std::string ext = lowerExtension(path);
   return ext == ".obj" || ext == ".stl" || ext == ".ply" || ext == ".vtp" || ext == ".vtk";
@@ -61,6 +82,11 @@ vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path) {
   if (!isSurfaceMeshPath(path))
     throw std::runtime_error(path + ": unknown mesh format '" + ext + "' (expected .obj, .stl, .ply, .vtp or .vtk)");
   if (!std::ifstream(path).good()) throw std::runtime_error(path + ": no such file");
+  try {
+    checkMeshFileClaims(path);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
   vtkSmartPointer<vtkPolyData> mesh;
   if (ext == ".obj")
     mesh = runReader<vtkOBJReader>(path);
@@ -73,11 +99,10 @@ vtkSmartPointer<vtkPolyData> readPolyData(const std::string& path) {
   else
     mesh = runReader<vtkPolyDataReader>(path);
   if (mesh->GetNumberOfPoints() == 0) throw std::runtime_error(path + ": cannot read a mesh (no points)");
-  double range[2];
-  for (int c = 0; c < 3; ++c) {
-    mesh->GetPoints()->GetData()->GetRange(range, c);
-    if (!std::isfinite(range[0]) || !std::isfinite(range[1]))
-      throw std::runtime_error(path + ": non-finite vertex coordinates");
+  try {
+    checkMeshContents(mesh);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(path + ": " + e.what());
   }
   return mesh;
 }

@@ -1,5 +1,10 @@
 #include "repose_pipeline.h"
 
+#include "mesh_file_claims.h"
+#include "mesh_io.h"
+#include "json_text.h"
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <initializer_list>
@@ -16,12 +21,15 @@
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkExecutive.h>
+#include <vtkFieldData.h>
+#include <vtkFloatArray.h>
 #include <vtkIdList.h>
 #include <vtkImageData.h>
 #include <vtkPoints.h>
 #include <vtkIntArray.h>
 #include <vtkMatrix3x3.h>
 #include <vtkPointData.h>
+#include <vtkPointSet.h>
 #include <vtkPolyData.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
@@ -113,6 +121,144 @@ std::string describeGrid(vtkImageData* image) {
   return m.str();
 }
 
+
+constexpr int kCaseVersion = 1;
+
+/// A JSON value as a short one-line text for messages.
+std::string brief(const Json::Value& value) {
+  Json::StreamWriterBuilder builder;
+  builder["indentation"] = "";
+  const std::string text = Json::writeString(builder, value);
+  return text.size() > 40 ? text.substr(0, 40) + "..." : text;
+}
+
+/// A file named by the case manifest: a plain name inside the case folder, never a path leaving it.
+std::string caseFile(const std::string& caseDir, const Json::Value& manifest, const char* key,
+                     const std::string& manifestPath) {
+  const Json::Value& name = manifest[key];
+  const std::string text = name.isString() ? name.asString() : std::string();
+  if (text.empty() || text == "." || text == ".." || text.find_first_of("/\\") != std::string::npos)
+    throw std::runtime_error(manifestPath + ": \"" + key + "\" must name a file inside the case folder, not '" +
+                             (name.isString() ? text : brief(name)) + "'");
+  return caseDir + "/" + text;
+}
+
+/// Reads a VTK XML file, its claims checked first; errors name the file on one line.
+template <class Reader>
+vtkSmartPointer<vtkPointSet> readXmlMesh(const std::string& path) {
+  try {
+    checkMeshFileClaims(path);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  auto reader = vtkSmartPointer<Reader>::New();
+  reader->SetFileName(path.c_str());
+  auto errors = captureErrors(reader);
+  reader->Update();
+  vtkPointSet* out = vtkPointSet::SafeDownCast(reader->GetOutputDataObject(0));
+  if (!errors->last.empty() || !out || out->GetNumberOfPoints() == 0)
+    throw std::runtime_error(path + ": cannot read (" + (errors->last.empty() ? "no points" : errors->last) + ")");
+  try {
+    checkMeshContents(out);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  vtkSmartPointer<vtkPointSet> copy;
+  copy.TakeReference(out->NewInstance());
+  copy->ShallowCopy(out);
+  return copy;
+}
+
+/// The array `name` of `data` with `components` components and `tuples` tuples, or an error.
+vtkDataArray* caseArray(vtkFieldData* data, const char* name, int components, vtkIdType tuples,
+                        const std::string& path) {
+  vtkDataArray* a = vtkDataArray::SafeDownCast(data->GetAbstractArray(name));
+  if (!a || a->GetNumberOfComponents() != components || a->GetNumberOfTuples() != tuples)
+    throw std::runtime_error(path + ": array " + name + " is missing or not " + std::to_string(tuples) + " x " +
+                             std::to_string(components) + " (not a prepared case file, or a damaged one)");
+  return a;
+}
+
+std::string shortNumber(double v) {
+  std::ostringstream text;
+  text << v;
+  return text.str();
+}
+
+/// Every value of `a` finite and, when lo <= hi, within [lo, hi].
+void requireValues(vtkDataArray* a, double lo, double hi, const std::string& path) {
+  for (vtkIdType i = 0, n = a->GetNumberOfTuples(); i < n; ++i)
+    for (int c = 0; c < a->GetNumberOfComponents(); ++c) {
+      const double v = a->GetComponent(i, c);
+      if (!std::isfinite(v) || (lo <= hi && (v < lo || v > hi)))
+        throw std::runtime_error(path + ": array " + a->GetName() + " holds " + shortNumber(v) + " at tuple " +
+                                 std::to_string(i) + (lo <= hi ? " (expected " + std::to_string(int(lo)) + ".." +
+                                                                     std::to_string(int(hi)) + ")"
+                                                               : std::string(" (not finite)")));
+    }
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> readCaseMesh(const std::string& path, const Json::Value& manifest,
+                                                  const std::string& manifestPath, const Skeleton& skeleton) {
+  auto mesh = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  mesh->ShallowCopy(readXmlMesh<vtkXMLUnstructuredGridReader>(path));
+  if (!manifest["nodes"].isIntegral() || manifest["nodes"].asLargestInt() != mesh->GetNumberOfPoints() ||
+      !manifest["tets"].isIntegral() || manifest["tets"].asLargestInt() != mesh->GetNumberOfCells())
+    throw std::runtime_error(manifestPath + ": says " + brief(manifest["nodes"]) +
+                             " nodes and " + brief(manifest["tets"]) + " tets, " + path +
+                             " has " + std::to_string(mesh->GetNumberOfPoints()) + " and " +
+                             std::to_string(mesh->GetNumberOfCells()));
+  for (vtkIdType c = 0, n = mesh->GetNumberOfCells(); c < n; ++c)
+    if (mesh->GetCellType(c) != VTK_TETRA)
+      throw std::runtime_error(path + ": cell " + std::to_string(c) + " is not a tetrahedron");
+  const vtkIdType nodes = mesh->GetNumberOfPoints();
+  vtkDataArray* weights = vtkDataArray::SafeDownCast(mesh->GetPointData()->GetAbstractArray("Weights"));
+  const int influences = weights ? weights->GetNumberOfComponents() : 1;
+  requireValues(caseArray(mesh->GetPointData(), "Weights", influences, nodes, path), 0, -1, path);
+  const double lastBone = double(skeleton.joints.size()) - 1;
+  requireValues(caseArray(mesh->GetPointData(), "BoneIds", influences, nodes, path), 0, lastBone, path);
+  requireValues(caseArray(mesh->GetPointData(), "FixedBone", 1, nodes, path), -1, lastBone, path);
+  return mesh;
+}
+
+vtkSmartPointer<vtkPolyData> readCaseSurfaces(const std::string& path, vtkIdType tets) {
+  auto surfaces = vtkSmartPointer<vtkPolyData>::New();
+  surfaces->ShallowCopy(readXmlMesh<vtkXMLPolyDataReader>(path));
+  const vtkIdType n = surfaces->GetNumberOfPoints();
+  requireValues(caseArray(surfaces->GetPointData(), "BoundTet", 1, n, path), 0, double(tets) - 1, path);
+  requireValues(caseArray(surfaces->GetPointData(), "BoundWeights", 4, n, path), 0, -1, path);
+  if (!vtkIntArray::SafeDownCast(surfaces->GetPointData()->GetArray("BoundTet")) ||
+      !vtkFloatArray::SafeDownCast(surfaces->GetPointData()->GetArray("BoundWeights")))
+    throw std::runtime_error(path + ": BoundTet must be int32 and BoundWeights float32");
+  return surfaces;
+}
+
+/// The tet mesh was made from the label volume: its nodes lie within the volume's box, give or take
+/// the meshing grid's coarser voxels (a quarter of the box, and three voxels, of margin). A case
+/// whose labels lie elsewhere than its mesh (another scan's, or a moved grid) is refused.
+void checkMeshOnGrid(vtkPointSet* mesh, const std::string& meshPath, vtkImageData* labels,
+                     const std::string& labelsPath) {
+  int dims[3];
+  double spacing[3];
+  labels->GetDimensions(dims);
+  labels->GetSpacing(spacing);
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (int corner = 0; corner < 8; ++corner) {
+    const double ijk[3] = {corner & 1 ? dims[0] - 1.0 : 0.0, corner & 2 ? dims[1] - 1.0 : 0.0,
+                           corner & 4 ? dims[2] - 1.0 : 0.0};
+    double xyz[3];
+    labels->TransformContinuousIndexToPhysicalPoint(ijk, xyz);
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], xyz[a]), hi[a] = std::max(hi[a], xyz[a]);
+  }
+  const double margin = 0.25 * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) +
+                        3 * std::max({spacing[0], spacing[1], spacing[2]});
+  double b[6];
+  mesh->GetBounds(b);
+  for (int a = 0; a < 3; ++a)
+    if (b[2 * a] < lo[a] - margin || b[2 * a + 1] > hi[a] + margin)
+      throw std::runtime_error(labelsPath + ": its grid (" + describeGrid(labels) + ") does not hold " + meshPath +
+                               " (the case's labels and mesh come from different scans)");
+}
 }  // namespace
 
 vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
@@ -138,8 +284,15 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
   }
   vtkIntArray* labels = vtkIntArray::SafeDownCast(image->GetPointData()->GetScalars());
   labels->SetName("Labels");
+  // Tables indexed by label value are sized by the largest label: bound it before anyone allocates.
   bool any = false;
-  for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n && !any; ++i) any = labels->GetValue(i) != 0;
+  for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n; ++i) {
+    const int v = labels->GetValue(i);
+    if (v < 0 || v > kMaxLabelValue)
+      throw std::runtime_error(path + ": label " + std::to_string(v) + " is outside 0.." +
+                               std::to_string(kMaxLabelValue) + " (not a label volume, or a damaged one)");
+    any = any || v != 0;
+  }
   if (!any) throw std::runtime_error(path + ": empty label volume (every voxel is 0)");
   return image;
 }
@@ -247,10 +400,12 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   for (const Joint& joint : skeleton.joints) {
     if (joint.labels.empty())
       throw std::runtime_error(skeletonName + ": joint '" + joint.name + "' lists no labels (its bone has no voxels)");
-    for (int label : joint.labels)
+    for (int label : joint.labels) {
+      // Damage to the volume removes a bone as surely as a typo in the skeleton: name the volume.
       if (!present.count(label))
-        throw std::runtime_error(skeletonName + ": joint '" + joint.name + "' names label " +
-                                 std::to_string(label) + ", which " + labelsName + " does not contain");
+        throw std::runtime_error(labelsName + ": label " + std::to_string(label) + " of joint '" + joint.name +
+                                 "' in " + skeletonName + " is absent from the volume");
+    }
   }
 
   restLabels_ = labels;
@@ -363,7 +518,7 @@ void Pipeline::saveCase(const std::string& caseDir, const std::string& labelsExt
 
   Json::Value manifest;
   manifest["format"] = "repose-case";
-  manifest["version"] = 1;
+  manifest["version"] = kCaseVersion;
   manifest["mesh"] = "mesh.vtu";
   manifest["surfaces"] = "surfaces.vtp";
   manifest["skeleton"] = "skeleton.json";
@@ -386,49 +541,41 @@ void Pipeline::loadCase(const std::string& caseDir) {
     throw std::runtime_error(caseDir + ": not a prepared case (no manifest.json; run 'repose prepare')");
   Json::Value manifest;
   {
-    Json::CharReaderBuilder builder;
-    std::string errors;
-    std::istringstream in(readTextFile(manifestPath));
-    if (!Json::parseFromStream(builder, in, &manifest, &errors) || !manifest.isObject() ||
-        manifest["format"].asString() != "repose-case")
+    try {
+      manifest = parseJsonText(readTextFile(manifestPath), false);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(manifestPath + ": " + e.what());
+    }
+    if (!manifest.isObject() || !manifest["format"].isString() || manifest["format"].asString() != "repose-case")
       throw std::runtime_error(manifestPath + ": not a Repose case manifest");
   }
-  const std::string meshPath = caseDir + "/" + manifest["mesh"].asString();
-  const std::string surfacesPath = caseDir + "/" + manifest["surfaces"].asString();
-  const std::string skeletonPath = caseDir + "/" + manifest["skeleton"].asString();
-  const std::string labelsPath = caseDir + "/" + manifest["labels"].asString();
+  if (!manifest["version"].isInt() || manifest["version"].asInt() != kCaseVersion)
+    throw std::runtime_error(manifestPath + ": case version " + brief(manifest["version"]) +
+                             " is not " + std::to_string(kCaseVersion) + " (prepare the case again)");
+  const std::string meshPath = caseFile(caseDir, manifest, "mesh", manifestPath);
+  const std::string surfacesPath = caseFile(caseDir, manifest, "surfaces", manifestPath);
+  const std::string skeletonPath = caseFile(caseDir, manifest, "skeleton", manifestPath);
+  const std::string labelsPath = caseFile(caseDir, manifest, "labels", manifestPath);
   for (const auto& p : {meshPath, surfacesPath, skeletonPath, labelsPath})
     if (!fileExists(p)) throw std::runtime_error(p + ": missing from the case directory");
 
   auto t0 = Clock::now();
-  auto meshReader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
-  meshReader->SetFileName(meshPath.c_str());
-  meshReader->Update();
-  vtkUnstructuredGrid* mesh = meshReader->GetOutput();
-  if (!mesh || mesh->GetNumberOfCells() == 0 || !mesh->GetPointData()->GetArray("Weights") ||
-      !mesh->GetPointData()->GetArray("BoneIds") || !mesh->GetPointData()->GetArray("FixedBone"))
-    throw std::runtime_error(meshPath + ": not a weighted tet mesh (needs point data Weights, BoneIds, FixedBone)");
-  restMesh_ = vtkSmartPointer<vtkUnstructuredGrid>::New();
-  restMesh_->ShallowCopy(mesh);
-
-  auto surfReader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
-  surfReader->SetFileName(surfacesPath.c_str());
-  surfReader->Update();
-  if (!surfReader->GetOutput() || !surfReader->GetOutput()->GetPointData()->GetArray("BoundTet"))
-    throw std::runtime_error(surfacesPath + ": not bound surfaces (needs point data BoundTet, BoundWeights)");
-  restSurfaces_ = vtkSmartPointer<vtkPolyData>::New();
-  restSurfaces_->ShallowCopy(surfReader->GetOutput());
-
+  Skeleton skeleton;
   try {
-    skeletonJson_ = skeletonToJson(parseSkeletonJson(readTextFile(skeletonPath)));
+    skeleton = parseSkeletonJson(readTextFile(skeletonPath));
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(skeletonPath + ": " + e.what());
   }
+  skeletonJson_ = skeletonToJson(skeleton);
+  vtkSmartPointer<vtkUnstructuredGrid> mesh = readCaseMesh(meshPath, manifest, manifestPath, skeleton);
+  restMesh_ = mesh;
+  restSurfaces_ = readCaseSurfaces(surfacesPath, mesh->GetNumberOfCells());
   restLabels_ = readLabelVolume(labelsPath);
+  checkMeshOnGrid(mesh, meshPath, restLabels_, labelsPath);
   labelsExtension_ = imageExtension(labelsPath);
   labelTableTsv_.clear();
   if (manifest.isMember("labelTable")) {  // cases saved before it was kept have none
-    const std::string tablePath = caseDir + "/" + manifest["labelTable"].asString();
+    const std::string tablePath = caseFile(caseDir, manifest, "labelTable", manifestPath);
     if (!fileExists(tablePath)) throw std::runtime_error(tablePath + ": missing from the case directory");
     labelTableTsv_ = readTextFile(tablePath);
     try {

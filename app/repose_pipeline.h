@@ -46,8 +46,11 @@ struct StageTime {
   double seconds;
 };
 
+/// Largest label value accepted: label-indexed tables stay small whatever a damaged file claims.
+constexpr int kMaxLabelValue = 1000000;
+
 /// Reads a label volume; float files holding whole numbers are accepted. Throws std::runtime_error
-/// "FILE: problem" (unreadable, not integer, empty).
+/// "FILE: problem" (unreadable, not integer, negative or above kMaxLabelValue, empty).
 vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path);
 /// Reads an intensity image (CT/MRI) as float.
 vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path);

@@ -6,7 +6,7 @@ packages=(
   libvtk9-dev python3-vtk9 vtk9 libvtk9-qt-dev
   libinsighttoolkit5-dev
   libeigen3-dev libjsoncpp-dev
-  zlib1g-dev  # written .nii.gz outputs are read back to their last byte
+  zlib1g-dev  # gzip CRC and length checked: damaged inputs on read, written .nii.gz outputs read back
   libtet1.5-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
   qtbase5-dev

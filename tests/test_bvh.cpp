@@ -98,6 +98,10 @@ TEST(Bvh, RejectsMalformedFilesWithLineNumbers) {
     text.replace(text.find("OFFSET 0 -10 0"), 14, "OFFSET 0 -1O 0");
     expectBvhError(text, {"line 8", "bad number", "-1O"});
   }
+  // A value of 1e308 is finite but scaled to millimetres it overflows: refused where it stands.
+  expectBvhError(smallBvh("CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation", "Frames: 2",
+                          "1e308 2 3 10 20 30 40 50 60"),
+                 {"line 19", "bad number", "1e308", "1e9"});
   // Short and long rows: the channels do not add up.
   expectBvhError(smallBvh("CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation", "Frames: 2",
                           "1 2 3 10 20 30 40 50 60", "4 5 6 0 0 0 0 0"),

@@ -120,6 +120,10 @@ TEST(Skeleton, ErrorsNameTheProblem) {
   expectSkeletonError(R"({"joints": [{"name": "a", "parent": null, "center": [0,0,0], "labels": [4]},
                                      {"name": "b", "parent": "a", "center": [0,0,0], "labels": [2, 4]}]})",
                       {"label 4", "'a'", "'b'"});
+  expectSkeletonError(R"({"joints": [{"name": "pelvis", "parent": null, "center": [0,0,0], "labels": [0]}]})",
+                      {"pelvis", "label 0", "background"});
+  expectSkeletonError(R"({"joints": [{"name": "pelvis", "parent": null, "center": [0,0,0], "labels": [3, -2]}]})",
+                      {"pelvis", "label -2"});
 }
 
 TEST(Skeleton, ReadFileErrorsNameTheFile) {
@@ -167,6 +171,17 @@ TEST(Pose, JsonRoundTrip) {
 
 TEST(Pose, ErrorsNameTheProblem) {
   expectPoseError(R"({"rotations": {)", {"malformed JSON"});
+  // Deep nesting is a parse error on one line, not a stack overflow or a message without a file.
+  expectPoseError(std::string(100000, '['), {"pose.json", "malformed JSON", "nested too deeply"});
+  expectSkeletonError(std::string(100000, '{'), {"skeleton.json", "malformed JSON"});
+  for (const std::string& broken : {std::string("{\"rotations\": {\n\n"), std::string("[1,\n2,,]")}) {
+    try {
+      repose::parsePoseJson(broken);
+      ADD_FAILURE() << "accepted " << broken;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  }
   expectPoseError(R"({"rotations": {"knee": {"axis": [0, 0, 0], "degrees": 10}}})", {"knee", "axis", "zero"});
   expectPoseError(R"({"rotations": {"knee": {"axis": [1e-20, 0, 0], "degrees": 10}}})", {"knee", "zero"});
   expectPoseError(R"({"rotations": {"knee": {"quaternion": [0, 0, 0, 0]}}})", {"knee", "quaternion", "zero"});
@@ -191,6 +206,11 @@ TEST(Pose, ValidateNamesUnknownJoint) {
   repose::Pose bad;
   bad.rotations["hand"] = Eigen::Quaterniond(NAN, 0, 0, 0);
   expectError([&] { repose::validatePose(bad, s); }, {"'hand'"});
+  repose::Pose far;
+  far.translation = Eigen::Vector3d(0, 1e300, 0);  // finite, but posed nodes would not be
+  expectError([&] { repose::validatePose(far, s); }, {"translation", "1e+300", "millimetres"});
+  far.translation = Eigen::Vector3d(0, -0.99e6, 5);  // within a kilometre
+  repose::validatePose(far, s);
   expectError([] { repose::readPoseFile("/nonexistent/pose.json"); }, {"/nonexistent/pose.json", "cannot read"});
 }
 

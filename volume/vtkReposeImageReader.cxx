@@ -18,10 +18,15 @@
 #include "itkNiftiImageIOFactory.h"
 #include "itkNrrdImageIOFactory.h"
 
+#include "image_file_integrity.h"
+
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <mutex>
+#include <sstream>
 #include <stdexcept>
 
 vtkStandardNewMacro(vtkReposeImageReader);
@@ -47,14 +52,35 @@ struct Header
   double Direction[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
 };
 
+// Bounds beyond which a grid is damage, not anatomy: a voxel of a metre, an origin a thousand
+// kilometres away, more voxels than 32-bit indices address.
+constexpr double kMaxSpacingMm = 1000.0;
+constexpr double kMaxOriginMm = 1e9;
+constexpr double kMaxVoxels = 4294967295.0;
+
+struct FileKind
+{
+  bool IsFloat = false;
+  bool WideIntegers = false; // values may not fit an int: read as double, checked
+  std::uint64_t VoxelBytes = 0;
+};
+
+std::string Number(double x)
+{
+  std::ostringstream text;
+  text << x;
+  return text.str();
+}
+
 // Throws std::runtime_error with a short reason.
-bool IsFloatFile(const char* fileName)
+FileKind ProbeFile(const char* fileName)
 {
   std::ifstream probe(fileName, std::ios::binary);
   if (!probe)
   {
     throw std::runtime_error("file does not exist or is not readable");
   }
+  repose::checkImageHeader(fileName);
   itk::ImageIOBase::Pointer io =
     itk::ImageIOFactory::CreateImageIO(fileName, itk::ImageIOFactory::FileModeEnum::ReadMode);
   if (!io)
@@ -73,8 +99,53 @@ bool IsFloatFile(const char* fileName)
     throw std::runtime_error("image has " + std::to_string(io->GetNumberOfComponents()) +
       " components per voxel, expected a scalar image");
   }
+  double voxels = 1;
+  for (unsigned a = 0; a < io->GetNumberOfDimensions(); ++a)
+  {
+    voxels *= static_cast<double>(io->GetDimensions(a));
+  }
+  if (voxels < 1 || voxels > kMaxVoxels)
+  {
+    throw std::runtime_error("header claims " + Number(voxels) + " voxels");
+  }
+  using C = itk::IOComponentEnum;
   const auto type = io->GetComponentType();
-  return type == itk::IOComponentEnum::FLOAT || type == itk::IOComponentEnum::DOUBLE;
+  FileKind kind;
+  kind.IsFloat = type == C::FLOAT || type == C::DOUBLE;
+  kind.WideIntegers = type == C::UINT || type == C::LONG || type == C::ULONG || type == C::LONGLONG ||
+    type == C::ULONGLONG;
+  kind.VoxelBytes = static_cast<std::uint64_t>(voxels) * io->GetComponentSize();
+  return kind;
+}
+
+void CheckGrid(const Header& h)
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (!std::isfinite(h.Spacing[a]) || h.Spacing[a] <= 0 || h.Spacing[a] > kMaxSpacingMm)
+    {
+      throw std::runtime_error("voxel spacing " + Number(h.Spacing[a]) + " mm along axis " +
+        std::to_string(a) + " is not in (0, " + Number(kMaxSpacingMm) + "] mm");
+    }
+    if (!std::isfinite(h.Origin[a]) || std::fabs(h.Origin[a]) > kMaxOriginMm)
+    {
+      throw std::runtime_error("origin " + Number(h.Origin[a]) + " mm is not a sane coordinate");
+    }
+  }
+  const double* d = h.Direction;
+  for (int i = 0; i < 9; ++i)
+  {
+    if (!std::isfinite(d[i]))
+    {
+      throw std::runtime_error("direction matrix is not finite");
+    }
+  }
+  const double det = d[0] * (d[4] * d[8] - d[5] * d[7]) - d[1] * (d[3] * d[8] - d[5] * d[6]) +
+    d[2] * (d[3] * d[7] - d[4] * d[6]);
+  if (std::fabs(std::fabs(det) - 1) > 1e-3)
+  {
+    throw std::runtime_error("direction matrix is not a rotation (determinant " + Number(det) + ")");
+  }
 }
 
 template <class T>
@@ -97,13 +168,14 @@ typename itk::ImageFileReader<itk::Image<T, 3>>::Pointer MakeReader(const char* 
       h.Direction[3 * a + b] = image->GetDirection()(a, b);
     }
   }
+  CheckGrid(h);
   return reader;
 }
 
 Header ReadHeader(const char* fileName)
 {
   Header h;
-  h.IsFloat = IsFloatFile(fileName);
+  h.IsFloat = ProbeFile(fileName).IsFloat;
   if (h.IsFloat)
   {
     MakeReader<float>(fileName, h);
@@ -126,6 +198,30 @@ vtkSmartPointer<vtkDataArray> ReadPixels(const char* fileName, Header& h)
   array->SetName("ImageScalars");
   array->SetNumberOfTuples(static_cast<vtkIdType>(n));
   std::copy(image->GetBufferPointer(), image->GetBufferPointer() + n, array->GetPointer(0));
+  return array;
+}
+
+// Integers of 32-bit unsigned or 64-bit files, read exactly through double and refused when they
+// do not fit an int (3 000 000 000 would otherwise wrap to a negative label).
+vtkSmartPointer<vtkDataArray> ReadWideIntegers(const char* fileName, Header& h)
+{
+  auto reader = MakeReader<double>(fileName, h);
+  reader->Update();
+  auto* image = reader->GetOutput();
+  const std::size_t n = image->GetLargestPossibleRegion().GetNumberOfPixels();
+  const double* values = image->GetBufferPointer();
+  auto array = vtkSmartPointer<vtkIntArray>::New();
+  array->SetName("ImageScalars");
+  array->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (values[i] < -2147483648.0 || values[i] > 2147483647.0)
+    {
+      throw std::runtime_error("voxel value " + std::to_string(static_cast<long long>(values[i])) +
+        " does not fit a 32-bit signed integer");
+    }
+    array->SetValue(static_cast<vtkIdType>(i), static_cast<int>(values[i]));
+  }
   return array;
 }
 
@@ -152,8 +248,30 @@ vtkReposeImageReader::~vtkReposeImageReader()
 
 void vtkReposeImageReader::Fail(const std::string& reason)
 {
+  // ITK's descriptions span lines; a user reads one.
+  std::string oneLine;
+  for (char c : reason)
+  {
+    if (c == '\n' || c == '\r')
+    {
+      c = ' ';
+    }
+    if (c != ' ' || (!oneLine.empty() && oneLine.back() != ' '))
+    {
+      oneLine += c;
+    }
+  }
+  const auto itkPrefix = oneLine.find("): ");
+  if ((oneLine.rfind("ITK ERROR: ", 0) == 0 || oneLine.rfind("itk::ERROR: ", 0) == 0) && itkPrefix != std::string::npos)
+  {
+    oneLine = oneLine.substr(itkPrefix + 3);
+  }
+  while (!oneLine.empty() && oneLine.back() == ' ')
+  {
+    oneLine.pop_back();
+  }
   this->LastError =
-    std::string(this->FileName ? this->FileName : "(no file name)") + ": cannot read (" + reason + ")";
+    std::string(this->FileName ? this->FileName : "(no file name)") + ": cannot read (" + oneLine + ")";
   vtkErrorMacro(<< this->LastError);
 }
 
@@ -199,10 +317,12 @@ int vtkReposeImageReader::RequestData(
   try
   {
     Header h;
-    h.IsFloat = IsFloatFile(this->FileName);
-    vtkSmartPointer<vtkDataArray> scalars = h.IsFloat
-      ? ReadPixels<float, vtkFloatArray>(this->FileName, h)
-      : ReadPixels<int, vtkIntArray>(this->FileName, h);
+    const FileKind kind = ProbeFile(this->FileName);
+    h.IsFloat = kind.IsFloat;
+    repose::checkImageFileIntegrity(this->FileName, kind.VoxelBytes);
+    vtkSmartPointer<vtkDataArray> scalars = h.IsFloat ? ReadPixels<float, vtkFloatArray>(this->FileName, h)
+      : kind.WideIntegers                             ? ReadWideIntegers(this->FileName, h)
+                                                      : ReadPixels<int, vtkIntArray>(this->FileName, h);
     output->Initialize();
     output->SetExtent(h.Extent);
     output->SetOrigin(h.Origin);

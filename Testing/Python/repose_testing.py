@@ -153,6 +153,32 @@ def check(cond, message, failures):
         failures.append(message)
 
 
+def expect_refusal(what, args, name, out, failures):
+    """Runs the CLI with `args` + `--out out` and checks the refusal: non-zero exit, one stderr line
+    `repose: error: ...` naming `name`, and nothing left in `out`."""
+    code, _, stderr = run(*args, "--out", out, check=False)
+    lines = [l for l in stderr.splitlines() if l.strip()]
+    one_line = len(lines) == 1 and lines[0].startswith("repose: error:")
+    names_file = bool(lines) and name in lines[0]
+    no_output = not os.path.exists(out) or (os.path.isdir(out) and not os.listdir(out))
+    check(code > 0 and one_line and names_file and no_output,
+          f"{what}: exit {code}, {len(lines)} line(s) {'naming' if names_file else 'NOT naming'} {name}, "
+          f"{'no' if no_output else 'PARTIAL'} output: {lines[0] if lines else ''}", failures)
+    return lines[0] if lines else ""
+
+
+def file_digests(folder):
+    """sha256 of every file under `folder`, by relative path (to show inputs were not touched)."""
+    import hashlib
+    digests = {}
+    for root, _, files in os.walk(folder):
+        for f in files:
+            path = os.path.join(root, f)
+            with open(path, "rb") as fh:
+                digests[os.path.relpath(path, folder)] = hashlib.sha256(fh.read()).hexdigest()
+    return digests
+
+
 def compare_with_baseline(png_path, name, threshold=10.0):
     """VTK's image comparison of a rendered PNG with Testing/Data/Baseline/<name>.png. A missing
     baseline copies the candidate to Testing/Temporary and fails (inspect it, then copy it)."""

@@ -27,14 +27,18 @@ bool equalsNoCase(std::string_view a, std::string_view b) {
   return true;
 }
 
-// Whole token must be a finite number (from_chars: no locale, no allocation).
+// Beyond this no channel or offset is motion (10^9 cm is 10 000 km, 10^9 degrees 3 million turns):
+// it is damage, and scaled to millimetres it would overflow into infinity downstream.
+constexpr double kMaxBvhMagnitude = 1e9;
+
+// Whole token must be a finite number of sane size (from_chars: no locale, no allocation).
 bool parseDouble(std::string_view token, double& value) {
   const char* b = token.data();
   const char* e = b + token.size();
   if (b != e && *b == '+') ++b;
   if (b == e) return false;
   const auto result = std::from_chars(b, e, value);
-  return result.ec == std::errc() && result.ptr == e && std::isfinite(value);
+  return result.ec == std::errc() && result.ptr == e && std::isfinite(value) && std::fabs(value) <= kMaxBvhMagnitude;
 }
 
 bool parseInt(std::string_view token, long& value) {
@@ -137,7 +141,7 @@ void readOffset(Lexer& lex, Eigen::Vector3d& offset) {
     const Token t = lex.next();
     if (t.text.empty()) lex.fail(t.line, "file ends inside OFFSET");
     if (!parseDouble(t.text, offset[k]))
-      lex.fail(t.line, "bad number " + quoted(t.text) + " in OFFSET (expected 3 numbers)");
+      lex.fail(t.line, "bad number " + quoted(t.text) + " in OFFSET (expected 3 finite numbers within +-1e9)");
   }
 }
 
@@ -319,7 +323,7 @@ BvhMotion parseBvh(const std::string& text, const std::string& sourceName) {
         if (count < columns) {
           if (!parseDouble(token, out[count]))
             lex.fail(line, "bad number " + quoted(token) + " in frame " + std::to_string(row) + ", value " +
-                               std::to_string(count + 1));
+                               std::to_string(count + 1) + " (expected a finite number within +-1e9)");
         }
         ++count;
         while (q != lineEnd && isSpace(*q)) ++q;

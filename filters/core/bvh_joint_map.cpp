@@ -1,5 +1,7 @@
 #include "bvh_joint_map.h"
 
+#include "json_text.h"
+
 #include "anatomy_names.h"
 
 #include <json/json.h>
@@ -168,13 +170,12 @@ BvhJointMap defaultCmuJointMap(const BvhMotion& motion, const Skeleton& skeleton
 }
 
 BvhJointMap parseJointMapJson(const std::string& text) {
-  Json::CharReaderBuilder builder;
-  builder["collectComments"] = false;
-  std::unique_ptr<Json::CharReader> reader(builder.newCharReader());
   Json::Value root;
-  std::string errors;
-  if (!reader->parse(text.data(), text.data() + text.size(), &root, &errors))
-    throw std::invalid_argument("joint map: malformed JSON: " + errors);
+  try {
+    root = parseJsonText(text, false);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("joint map: ") + e.what());
+  }
   if (root.isObject() && root.isMember("map")) root = root["map"];
   if (!root.isObject())
     throw std::invalid_argument("joint map: expected an object {\"BVH joint\": \"skeleton joint\", ...}");

@@ -1,5 +1,7 @@
 #include "pose.h"
 
+#include "json_text.h"
+
 #include <json/json.h>
 
 #include <cmath>
@@ -57,14 +59,12 @@ Eigen::Quaterniond readRotation(const std::string& joint, const Json::Value& r) 
 }  // namespace
 
 Pose parsePoseJson(const std::string& text) {
-  Json::CharReaderBuilder builder;
-  builder["collectComments"] = false;
-  builder["allowSpecialFloats"] = true;  // NaN/Infinity parse, so the error can say which value
-  std::unique_ptr<Json::CharReader> reader(builder.newCharReader());
   Json::Value root;
-  std::string errors;
-  if (!reader->parse(text.data(), text.data() + text.size(), &root, &errors))
-    fail("malformed JSON: " + errors);
+  try {
+    root = parseJsonText(text, true);  // NaN/Infinity parse, so the error can say which value
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
   if (!root.isObject()) fail("top level must be an object {\"rotations\": {...}, \"translation\": [x,y,z]}");
 
   Pose pose;
@@ -146,6 +146,13 @@ void validatePose(const Pose& pose, const Skeleton& skeleton) {
   }
   if (!pose.translation.allFinite())
     throw std::invalid_argument("pose translation is not finite");
+  // Beyond a kilometre float32 node coordinates lose sub-millimetre precision and no body moves so far.
+  if (pose.translation.cwiseAbs().maxCoeff() > kMaxTranslationMm) {
+    std::ostringstream why;
+    why << "pose translation (" << pose.translation.x() << ", " << pose.translation.y() << ", "
+        << pose.translation.z() << ") mm is beyond " << kMaxTranslationMm << " mm (translations are in millimetres)";
+    throw std::invalid_argument(why.str());
+  }
 }
 
 std::vector<Eigen::Isometry3d> forwardKinematics(const Skeleton& skeleton, const Pose& pose) {

@@ -28,6 +28,8 @@ std::string poseToAxisAngleJson(const Pose& pose);
 Pose readPoseFile(const std::string& path);
 /// Throws std::invalid_argument if the pose names a joint the skeleton does not have.
 void validatePose(const Pose& pose, const Skeleton& skeleton);
+/// Largest |translation| component validatePose accepts (1 km).
+constexpr double kMaxTranslationMm = 1e6;
 
 /// Global rigid transform of every joint's bone (rest -> posed):
 /// G_j = G_parent · T(c_j) · R_j · T(-c_j), the root's preceded by T(translation).

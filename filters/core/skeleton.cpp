@@ -1,5 +1,7 @@
 #include "skeleton.h"
 
+#include "json_text.h"
+
 #include <json/json.h>
 
 #include <algorithm>
@@ -18,16 +20,12 @@ namespace {
   throw std::invalid_argument("skeleton.json: " + message);
 }
 
-Json::Value parseJsonText(const std::string& text) {
-  Json::CharReaderBuilder builder;
-  builder["collectComments"] = false;
-  builder["allowSpecialFloats"] = true;  // NaN/Infinity parse, so the error can say which value
-  std::unique_ptr<Json::CharReader> reader(builder.newCharReader());
-  Json::Value root;
-  std::string errors;
-  if (!reader->parse(text.data(), text.data() + text.size(), &root, &errors))
-    fail("malformed JSON: " + errors);
-  return root;
+Json::Value parseSkeletonText(const std::string& text) {
+  try {
+    return parseJsonText(text, true);  // NaN/Infinity parse, so the error can say which value
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
 }
 
 // Valid UTF-8 without control characters: a name that is not would not survive being written back
@@ -92,6 +90,10 @@ RawJoint readJoint(const Json::Value& value, Json::ArrayIndex index) {
     for (const Json::Value& l : labels) {
       if (!l.isIntegral() || !l.isInt())
         fail("joint '" + name + "': \"labels\" must be an array of integers");
+      // Label 0 is the background around the body (TetGen would refine its open surface forever).
+      if (l.asInt() <= 0)
+        fail("joint '" + name + "': label " + std::to_string(l.asInt()) +
+             " is not a bone label (labels are positive; 0 is the background)");
       raw.joint.labels.push_back(l.asInt());
     }
   }
@@ -107,7 +109,7 @@ int Skeleton::find(const std::string& name) const {
 }
 
 Skeleton parseSkeletonJson(const std::string& text) {
-  const Json::Value root = parseJsonText(text);
+  const Json::Value root = parseSkeletonText(text);
   if (!root.isObject() || !root.isMember("joints") || !root["joints"].isArray())
     fail("missing \"joints\" array");
   const Json::Value& joints = root["joints"];

@@ -182,7 +182,7 @@ ImageGrid gridFittingPoints(const MeshVertices& V, double voxelMm, double padVox
     const double fit = std::cbrt(size.prod() / double(maxVoxels)) * 1.05;
     std::ostringstream s;
     s << "a " << voxelMm << " mm grid over the skin's bounds (" << size.x() << " x " << size.y() << " x " << size.z()
-      << " mm) needs " << g.dims[0] << "x" << g.dims[1] << "x" << g.dims[2] << " = " << std::size_t(count)
+      << " mm) needs " << g.dims[0] << "x" << g.dims[1] << "x" << g.dims[2] << " = " << std::setprecision(4) << count
       << " voxels, above the limit of " << maxVoxels << "; use a voxel size of at least about " << fit
       << " mm or raise the limit";
     throw std::invalid_argument(s.str());
