@@ -52,8 +52,9 @@ runs += [(["pose", "--case", case, "--pose", pose, "--out", out], out, limit, f"
          for limit in (0, 100, 64 * KB, 1 * MB, 3 * MB)]
 runs += [(["pose", "--case", case, "--pose", pose, "--format", "nrrd", "--out", out], out, 4 * MB,
           f"{out}/posed_labels.nrrd")]  # the mesh (3.8 MB) fits, the raw volume (8 MB) does not
+# The series' label table (frames/labels.tsv, a few hundred bytes) is written first, then the frames.
 runs += [(["animate", "--case", case, "--bvh", bvh, "--frames", "0:3", "--volumes", "--out", out], out, limit,
-          f"{out}/frames/mesh_00000.vtu") for limit in (0, 1 * MB)]
+          f"{out}/frames/{named}") for limit, named in ((0, "labels.tsv"), (1 * MB, "mesh_00000.vtu"))]
 
 for args, folder, limit, named in runs:
     what = f"{args[0]} under a {limit} B file-size limit"
