@@ -159,6 +159,18 @@ TEST(Pose, ParsesAxisAngleAndQuaternion) {
   EXPECT_EQ(empty.translation, Eigen::Vector3d::Zero());
 }
 
+// Found by fuzzing: components near 1e300 overflowed the norm and gave a zero rotation axis.
+TEST(Pose, HugeAxisAndQuaternionComponentsStillGiveUnitRotations) {
+  const repose::Pose p = repose::parsePoseJson(R"({
+    "rotations": {"knee": {"axis": [5e297, 0, 1], "degrees": -90},
+                  "hip": {"quaternion": [1e300, 1e300, 0, 0]}}})");
+  const Eigen::Quaterniond knee(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()));
+  EXPECT_NEAR(p.rotations.at("knee").norm(), 1.0, 1e-15);
+  EXPECT_NEAR(std::abs(p.rotations.at("knee").dot(knee)), 1.0, 1e-15);
+  EXPECT_NEAR(p.rotations.at("hip").w(), std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(p.rotations.at("hip").x(), std::sqrt(0.5), 1e-15);
+}
+
 TEST(Pose, JsonRoundTrip) {
   repose::Pose p;
   p.rotations["forearm"] = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()));

@@ -40,20 +40,22 @@ Eigen::Quaterniond readRotation(const std::string& joint, const Json::Value& r) 
   if (hasAxis && hasQuat) fail(where + " has both \"axis\"/\"degrees\" and \"quaternion\"; give one");
   if (hasQuat) {
     const Eigen::Vector4d q = readVector<4>(r["quaternion"], where + ": \"quaternion\" [w,x,y,z]");
-    const double n = q.norm();
+    // stableNorm: a plain norm overflows for components near 1e300 and the result is not unit.
+    const double n = q.stableNorm();
     if (n < 1e-12) fail(where + ": \"quaternion\" is zero");
-    return Eigen::Quaterniond(q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    const Eigen::Vector4d u = q.stableNormalized();
+    return Eigen::Quaterniond(u[0], u[1], u[2], u[3]);
   }
   if (!hasAxis) fail(where + " needs \"axis\" and \"degrees\", or \"quaternion\"");
   if (!r.isMember("axis")) fail(where + " has \"degrees\" but no \"axis\"");
   if (!r.isMember("degrees")) fail(where + " has \"axis\" but no \"degrees\"");
   const Eigen::Vector3d axis = readVector<3>(r["axis"], where + ": \"axis\"");
-  const double n = axis.norm();
+  const double n = axis.stableNorm();  // see "quaternion": no overflow for huge components
   if (n < 1e-12) fail(where + ": \"axis\" is zero");
   if (!r["degrees"].isNumeric()) fail(where + ": \"degrees\" must be a number");
   const double deg = r["degrees"].asDouble();
   if (!std::isfinite(deg)) fail(where + ": \"degrees\" is not finite");
-  return Eigen::Quaterniond(Eigen::AngleAxisd(deg * M_PI / 180.0, axis / n));
+  return Eigen::Quaterniond(Eigen::AngleAxisd(deg * M_PI / 180.0, axis.stableNormalized()));
 }
 
 }  // namespace
