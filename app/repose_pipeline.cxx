@@ -437,7 +437,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
     std::istringstream lines(mesher->GetReport());
     for (std::string line; std::getline(lines, line);)
       if (line.rfind("body mask", 0) == 0 || line.rfind("meshing grid", 0) == 0 || line.rfind("contact ", 0) == 0 ||
-          line.rfind("over the budget", 0) == 0)
+          line.rfind("over the budget", 0) == 0 || line.rfind("tetgen", 0) == 0 || line.rfind("decimated", 0) == 0)
         report_.push_back(line);
   }
 

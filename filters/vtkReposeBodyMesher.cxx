@@ -262,8 +262,13 @@ int vtkReposeBodyMesher::RequestData(
       }
     };
     repose::TetMesh mesh = meshBody();
-    report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
-           << " s)\n";
+    auto reportTetGen = [&]() {
+      report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets, "
+             << (tetReport.surfacePreserved ? "surface kept" : "surface split")
+             << (tetReport.preserveFailure.empty() ? "" : " (keeping it failed: " + tetReport.preserveFailure + ")")
+             << " (" << tetReport.seconds << " s)\n";
+    };
+    reportTetGen();
     this->TetGenSeconds = tetReport.seconds;
     // The budget's prediction is a fit: where TetGen exceeds the budget by a tenth, choose again
     // with the tets per surface point this body has shown, and mesh once more.
@@ -274,8 +279,7 @@ int vtkReposeBodyMesher::RequestData(
       report << "over the budget of " << this->MaxTets << " tets (" << maskOptions.tetsPerPoint
              << " tets per surface point): meshing again\n";
       mesh = meshBody();
-      report << "tetgen: " << tetReport.nodes << " nodes, " << tetReport.tets << " tets (" << tetReport.seconds
-             << " s)\n";
+      reportTetGen();
       this->TetGenSeconds += tetReport.seconds;
     }
 

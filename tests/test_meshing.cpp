@@ -251,6 +251,43 @@ TEST(TetMesher, CubeWithSeeds) {
   EXPECT_LE(m.nodes.col(2).maxCoeff(), 20 + 1e-9);
 }
 
+// The default keeps the surface: the mesh's boundary faces are the input triangles, unsplit, and
+// quality refinement adds interior points only. Allowing splitting refines the boundary as well.
+TEST(TetMesher, SurfaceKeptUnlessSplittingIsAllowed) {
+  Points V(0, 3);
+  Triangles F(0, 3);
+  addBox(V, F, {0, 0, 0}, {40, 10, 10});  // long faces: bad tets next to them
+  auto boundaryFaces = [](const TetMesh& m) {
+    std::map<std::array<int, 3>, int> count;
+    const int faces[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+    for (Eigen::Index t = 0; t < m.tets.rows(); ++t)
+      for (const auto& f : faces) {
+        std::array<int, 3> key{m.tets(t, f[0]), m.tets(t, f[1]), m.tets(t, f[2])};
+        std::sort(key.begin(), key.end());
+        ++count[key];
+      }
+    int boundary = 0;
+    for (const auto& [key, n] : count) boundary += n == 1;
+    return boundary;
+  };
+  TetMeshingOptions opt;
+  opt.radiusEdgeRatio = 1.2;
+  TetMeshingReport kept;
+  const TetMesh m = tetrahedralizeSurface(V, F, Points(0, 3), opt, &kept);
+  EXPECT_TRUE(kept.surfacePreserved);
+  EXPECT_TRUE(kept.preserveFailure.empty());
+  EXPECT_EQ(boundaryFaces(m), F.rows());
+  EXPECT_NEAR(meshVolume(m.nodes, m.tets), 4000.0, 4000.0 * 1e-9);
+  expectPositive(m);
+
+  opt.preserveSurface = false;
+  TetMeshingReport split;
+  const TetMesh s = tetrahedralizeSurface(V, F, Points(0, 3), opt, &split);
+  EXPECT_FALSE(split.surfacePreserved);
+  EXPECT_GT(boundaryFaces(s), F.rows());
+  EXPECT_NEAR(meshVolume(s.nodes, s.tets), 4000.0, 4000.0 * 1e-9);
+}
+
 TEST(TetMesher, VolumeBoundAndOutsideSeedsIgnored) {
   Points V(0, 3);
   Triangles F(0, 3);

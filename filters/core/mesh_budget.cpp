@@ -41,10 +41,10 @@ std::size_t boundaryFaces(const MaskVolume& mask) {
   return total;
 }
 
-// kTetsPerPoint: TetGen's tets (radius-edge 2) per surface face or seed were 11.6 on the medium
-// phantom (179 506 faces, 54 605 seeds, 2.72 M tets), 12.3 on the small phantom lying in contact,
-// 12.8 on the TotalSegmentator CT and 16.4 on the Visible Human female at 3.7 mm (a real skin has more
-// small features): the mesher corrects its spacing once with the ratio it met.
+// kTetsPerPoint: TetGen's tets (radius-edge 2, surface kept) per surface face or seed were 7.8 on
+// the medium phantom (171 108 faces, 54 605 seeds, 1.76 M tets), 7.3 on the small phantom lying in
+// contact, 7.9 on the TotalSegmentator CT, 7.5 on the Visible Human female at 3.7 mm and 10.1 on the
+// large phantom: the mesher corrects its spacing once with the ratio it met.
 double predictTets(std::size_t surfaceFaces, std::size_t seeds, double tetsPerPoint) {
   return tetsPerPoint * double(surfaceFaces + seeds);
 }

@@ -18,10 +18,11 @@ SeedSteps seedSteps(const ImageGrid& scan, double spacingMm);
 /// Voxel faces between a set and an unset voxel (the grid's border counts as unset).
 std::size_t boundaryFaces(const MaskVolume& mask);
 
-/// Tets TetGen makes (radius-edge bound 2) from a body whose binned mask has `surfaceFaces`
-/// boundary faces (the marching-cubes surface has about one vertex per face) and `seeds` bone seed
-/// points: about 12 per face or seed on the phantoms and real scans, 13 taken.
-constexpr double kTetsPerPoint = 13.0;
+/// Tets TetGen makes (radius-edge bound 2, surface kept) from a body whose binned mask has
+/// `surfaceFaces` boundary faces (the marching-cubes surface has about one vertex per face) and
+/// `seeds` bone seed points: 6.7-7.9 per face or seed on the phantoms and real scans (10.1 on the
+/// large phantom), 8.5 taken so that most bodies come out a little under the budget.
+constexpr double kTetsPerPoint = 8.5;
 double predictTets(std::size_t surfaceFaces, std::size_t seeds, double tetsPerPoint = kTetsPerPoint);
 
 struct MeshSpacingChoice {

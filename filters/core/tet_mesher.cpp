@@ -56,8 +56,11 @@ void checkClosedSurface(const Triangles& F) {
 }
 
 // TetGen 1.5.0's tetrahedralize() crashes when it reports an error: terminatetetgen() frees the mesh
-// and throws, then the destructor of its stack mesh frees it again. So the stages we use (-p without
-// -Y/-r/-m/-R, -q) are driven here with a heap mesh, leaked on error (its pools are already freed then).
+// and throws, then the destructor of its stack mesh frees it again. So the stages we use (-p, -q, -Y;
+// no -r/-m/-R) are driven here with a heap mesh, leaked on error (its pools are already freed then).
+// With -Y, tetrahedralize() would next remove the few Steiner points the constrained Delaunay stage
+// put on the surface (suppresssteinerpoints(), which crashes in 1.5.0 on body surfaces) and restore
+// the Delaunay property around them; both are skipped: those points stay, the surface is unchanged.
 // Seeds are passed as isolated input points, not with -i: 1.5.0's insertconstrainedpoints() can walk
 // off the carved mesh and crash.
 void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
@@ -114,7 +117,7 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
     if ((seeds.row(s).array() >= lo.array()).all() && (seeds.row(s).array() <= hi.array()).all())
       keptSeeds.push_back(s);
 
-  tetgenio in, out;
+  tetgenio in;
   in.firstnumber = 0;
   // Surface points, then the seeds as isolated points (TetGen drops those outside the surface).
   in.numberofpoints = int(V.rows() + Eigen::Index(keptSeeds.size()));
@@ -134,32 +137,50 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
     facet.polygonlist[0].vertexlist = new int[3]{F(f, 0), F(f, 1), F(f, 2)};
   }
 
-  // p: PLC, q: quality bound, a: volume bound, z: zero-based, F: no face
-  // output (not needed), Q/V: quiet/verbose. Boundary splitting stays allowed (more robust recovery).
-  std::ostringstream sw;
-  sw.precision(17);
-  sw << "p";
-  if (options.radiusEdgeRatio > 0) {
-    sw << "q" << options.radiusEdgeRatio;
-    if (options.minDihedralDegrees > 0) sw << "/" << options.minDihedralDegrees;
+  // p: PLC, q: quality bound, a: volume bound, Y: surface preserved, z: zero-based, F: no face
+  // output (not needed), Q/V: quiet/verbose.
+  auto switchesFor = [&](bool preserve) {
+    std::ostringstream sw;
+    sw.precision(17);
+    sw << "p";
+    if (options.radiusEdgeRatio > 0) {
+      sw << "q" << options.radiusEdgeRatio;
+      if (options.minDihedralDegrees > 0) sw << "/" << options.minDihedralDegrees;
+    }
+    if (options.maxTetVolume > 0) sw << "a" << options.maxTetVolume;
+    if (preserve) sw << "Y";
+    sw << "zF" << (options.verbose ? "V" : "Q");
+    return sw.str();
+  };
+  auto runWith = [&](bool preserve, tetgenio& result) {
+    std::string switches = switchesFor(preserve);
+    tetgenbehavior behavior;
+    if (!behavior.parse_commandline(&switches[0]))
+      throw std::invalid_argument("tet mesher: TetGen rejected the switches '" + switches + "'");
+    try {
+      runTetGen(behavior, in, result);
+    } catch (int code) {
+      throw std::invalid_argument("tet mesher: " + tetgenErrorText(code));
+    } catch (const std::bad_alloc&) {
+      throw std::invalid_argument("tet mesher: " + tetgenErrorText(1));
+    }
+    if (result.numberoftetrahedra <= 0 || result.numberofcorners < 4)
+      throw std::invalid_argument("tet mesher: TetGen produced no tetrahedra (is the surface closed and non-degenerate?)");
+  };
+  tetgenio preserved;
+  tetgenio split;
+  bool surfacePreserved = false;
+  std::string preserveFailure;
+  if (options.preserveSurface && options.maxTetVolume <= 0) {
+    try {
+      runWith(true, preserved);
+      surfacePreserved = true;
+    } catch (const std::invalid_argument& e) {
+      preserveFailure = e.what();
+    }
   }
-  if (options.maxTetVolume > 0) sw << "a" << options.maxTetVolume;
-  sw << "zF";
-  sw << (options.verbose ? "V" : "Q");
-  std::string switches = sw.str();
-
-  tetgenbehavior behavior;
-  if (!behavior.parse_commandline(&switches[0]))
-    throw std::invalid_argument("tet mesher: TetGen rejected the switches '" + switches + "'");
-  try {
-    runTetGen(behavior, in, out);
-  } catch (int code) {
-    throw std::invalid_argument("tet mesher: " + tetgenErrorText(code));
-  } catch (const std::bad_alloc&) {
-    throw std::invalid_argument("tet mesher: " + tetgenErrorText(1));
-  }
-  if (out.numberoftetrahedra <= 0 || out.numberofcorners < 4)
-    throw std::invalid_argument("tet mesher: TetGen produced no tetrahedra (is the surface closed and non-degenerate?)");
+  if (!surfacePreserved) runWith(false, split);
+  tetgenio& out = surfacePreserved ? preserved : split;
 
   // Keep only nodes used by tets, renumbered in their original order.
   const int nOut = out.numberofpoints;
@@ -194,6 +215,8 @@ TetMesh tetrahedralizeSurface(const Points& V, const Triangles& F, const Points&
     report->seedPoints = int(seeds.rows());
     report->nodes = int(mesh.nodes.rows());
     report->tets = int(mesh.tets.rows());
+    report->surfacePreserved = surfacePreserved;
+    report->preserveFailure = preserveFailure;
     report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   return mesh;
