@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <random>
 #include <set>
 #include <stdexcept>
+#include <thread>
 
 #include "block_sparse_cg.h"
 #include "continuation_stall.h"
@@ -1714,4 +1716,132 @@ TEST(TwoLevelPreconditioner, NeedsFewerIterationsThanBlockJacobi) {
   EXPECT_LE(r.relativeResidual, 1e-8);
   std::printf("CG iterations: block Jacobi %d, two-level %d (%d aggregates)\n", jacobi, r.iterations, M.aggregates());
   EXPECT_LT(r.iterations, jacobi / 4);
+}
+
+namespace {
+
+// parallelFor() runners that split the work otherwise than the installed one: all of it in one call
+// on this thread, or contiguous ranges on `workers` std::threads whatever the grain.
+void serialRunner(std::size_t n, std::size_t, const repose::RangeBody& body) { body(0, n); }
+
+repose::ParallelRunner threadRunner(std::size_t workers) {
+  return [workers](std::size_t n, std::size_t, const repose::RangeBody& body) {
+    const std::size_t chunk = (n + workers - 1) / workers;
+    std::vector<std::thread> threads;
+    for (std::size_t b = 0; b < n; b += chunk) threads.emplace_back([&body, b, e = std::min(n, b + chunk)] { body(b, e); });
+    for (auto& t : threads) t.join();
+  };
+}
+
+bool bitIdentical(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * std::size_t(a.size())) == 0;
+}
+
+}  // namespace
+
+// Every sum of the block CGs and the two-level preconditioner is taken over chunks fixed by the
+// sizes and added in chunk order: the solutions are the same bits on one thread and on several.
+TEST(BlockSparseCg, SolutionsAreBitIdenticalForAnyThreadCount) {
+  const Box b = makeBox(40, 8, 8, 1.0);
+  Points positions;
+  repose::BlockSparseMatrix3f U = upperPart(clampedBoxStiffness(b, 10.0, 1.0, positions));
+  const int n = U.rows();
+  std::mt19937 rng(23);
+  std::normal_distribution<double> g;
+  repose::LowRankTerm3 L;  // a region-volume-like coupling: one term over the far half, one over all
+  L.weight = {3.0, 0.5};
+  L.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    for (int r = 0; r < 2; ++r) {
+      if (r == 0 && positions(i, 0) < 20.0) continue;
+      L.term.push_back(r);
+      for (int c = 0; c < 3; ++c) L.vector.push_back(0.1 * g(rng));
+    }
+    L.rowStart.push_back(int(L.term.size()));
+  }
+  U.lowRank = &L;
+  Eigen::VectorXd rhs(3 * n);
+  for (int i = 0; i < 3 * n; ++i) rhs(i) = g(rng);
+  struct Run {
+    Eigen::VectorXd jacobi, twoLevel;
+    repose::BlockCgResult jacobiCg, twoLevelCg;
+  };
+  auto solve = [&](const repose::ParallelRunner& runner) {
+    repose::setParallelRunner(runner);
+    Run run;
+    run.jacobi = Eigen::VectorXd::Zero(3 * n);
+    run.jacobiCg = repose::blockJacobiCg(U, rhs, run.jacobi, 1e-9, 300);  // far from converged: enough bits
+    repose::TwoLevelPreconditioner M;
+    M.aggregate(U, positions, 60);
+    M.update(U, positions);
+    run.twoLevel = Eigen::VectorXd::Zero(3 * n);
+    run.twoLevelCg = repose::preconditionedBlockCg(U, rhs, run.twoLevel, 1e-9, 10000, M);
+    repose::setParallelRunner(repose::ParallelRunner());
+    return run;
+  };
+  const Run serial = solve(serialRunner);
+  EXPECT_GT(U.column.size(), std::size_t(2 * 8192));  // several chunks of the upper product too
+  EXPECT_EQ(serial.jacobiCg.iterations, 300);
+  EXPECT_LT(serial.jacobiCg.relativeResidual, 0.1);
+  EXPECT_LE(serial.twoLevelCg.relativeResidual, 1e-9);
+  EXPECT_GT(serial.twoLevelCg.iterations, 5);
+  Eigen::VectorXd product;
+  U.multiply(serial.twoLevel, product);
+  EXPECT_LT((product - rhs).norm(), 1e-8 * rhs.norm());
+  std::vector<std::pair<const char*, repose::ParallelRunner>> runners = {
+      {"1 thread", threadRunner(1)}, {"2 threads", threadRunner(2)}, {"3 threads", threadRunner(3)},
+      {"7 threads", threadRunner(7)}, {"default runner", repose::ParallelRunner()}};
+  for (const auto& [name, runner] : runners) {
+    SCOPED_TRACE(name);
+    const Run run = solve(runner);
+    EXPECT_EQ(run.jacobiCg.iterations, serial.jacobiCg.iterations);
+    EXPECT_EQ(run.jacobiCg.relativeResidual, serial.jacobiCg.relativeResidual);
+    EXPECT_TRUE(bitIdentical(run.jacobi, serial.jacobi)) << (run.jacobi - serial.jacobi).cwiseAbs().maxCoeff();
+    EXPECT_EQ(run.twoLevelCg.iterations, serial.twoLevelCg.iterations);
+    EXPECT_EQ(run.twoLevelCg.relativeResidual, serial.twoLevelCg.relativeResidual);
+    EXPECT_TRUE(bitIdentical(run.twoLevel, serial.twoLevel)) << (run.twoLevel - serial.twoLevel).cwiseAbs().maxCoeff();
+  }
+}
+
+// The upper-stored product in several row chunks, also when couplings reach far (a stride through
+// the rows, so the chunks are merged to bound the spill buffers): the product summed serially, and
+// the same bits however the threads split the chunks.
+TEST(BlockSparseCg, ChunkedUpperProductMatchesASerialSum) {
+  const int n = 8000;
+  std::mt19937 rng(29);
+  std::normal_distribution<double> g;
+  repose::BlockSparseMatrix3f U;
+  U.upper = true;
+  U.rowStart.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    std::set<int> columns = {i};
+    for (int d : {1, 2})
+      if (i + d < n) columns.insert(i + d);
+    if (const int far = int((long long)i * 7919 % n); far > i) columns.insert(far);
+    for (int j : columns) {
+      U.column.push_back(j);
+      for (int k = 0; k < 9; ++k) U.values.push_back(float(g(rng)));
+    }
+    U.rowStart.push_back(int(U.column.size()));
+  }
+  Eigen::VectorXd x(3 * n);
+  for (int i = 0; i < 3 * n; ++i) x(i) = g(rng);
+  Eigen::VectorXd expected = Eigen::VectorXd::Zero(3 * n);
+  for (int i = 0; i < n; ++i)
+    for (int k = U.rowStart[std::size_t(i)]; k < U.rowStart[std::size_t(i) + 1]; ++k) {
+      const int j = U.column[std::size_t(k)];
+      const Eigen::Matrix3d A =
+          Eigen::Map<const Eigen::Matrix<float, 3, 3, Eigen::RowMajor>>(U.values.data() + 9 * std::size_t(k)).cast<double>();
+      expected.segment<3>(3 * i) += A * x.segment<3>(3 * j);
+      if (j != i) expected.segment<3>(3 * j) += A.transpose() * x.segment<3>(3 * i);
+    }
+  EXPECT_GT(U.column.size(), std::size_t(2 * 8192));
+  Eigen::VectorXd serial, threaded;
+  repose::setParallelRunner(serialRunner);
+  U.multiply(x, serial);
+  repose::setParallelRunner(threadRunner(3));
+  U.multiply(x, threaded);
+  repose::setParallelRunner(repose::ParallelRunner());
+  EXPECT_LT((serial - expected).norm(), 1e-12 * expected.norm());
+  EXPECT_TRUE(bitIdentical(serial, threaded));
 }

@@ -2,12 +2,31 @@
 
 #include <Eigen/LU>
 #include <algorithm>
-#include <omp.h>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
+#include "parallel_for.h"
+#include "parallel_sum.h"
+
 namespace repose {
+
+namespace {
+
+// Rows and scalars per chunk of the threaded loops; the sums are taken per chunk of these fixed
+// sizes and then in chunk order (parallel_sum.h), so no result depends on the thread count.
+constexpr std::size_t kRowChunk = 512;
+constexpr std::size_t kScalarChunk = 4096;
+
+double dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return parallelSum(std::size_t(a.size()), kScalarChunk, [&](std::size_t begin, std::size_t end) {
+    double s = 0;
+    for (std::size_t k = begin; k < end; ++k) s += a[Eigen::Index(k)] * b[Eigen::Index(k)];
+    return s;
+  });
+}
+
+}  // namespace
 
 void BlockSparseMatrix3f::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   if (upper) {
@@ -19,30 +38,32 @@ void BlockSparseMatrix3f::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y)
   y.resize(3 * Eigen::Index(n));
   const double* xp = x.data();
   double* yp = y.data();
-#pragma omp parallel for schedule(static, 512)
-  for (int i = 0; i < n; ++i) {
-    double s0 = 0, s1 = 0, s2 = 0;
-    for (int k = rowStart[std::size_t(i)]; k < rowStart[std::size_t(i) + 1]; ++k) {
-      const float* v = values.data() + 9 * std::size_t(k);
-      const double* xc = xp + 3 * std::size_t(column[std::size_t(k)]);
-      const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
-      s0 += double(v[0]) * x0 + double(v[1]) * x1 + double(v[2]) * x2;
-      s1 += double(v[3]) * x0 + double(v[4]) * x1 + double(v[5]) * x2;
-      s2 += double(v[6]) * x0 + double(v[7]) * x1 + double(v[8]) * x2;
+  parallelFor(std::size_t(n), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      double s0 = 0, s1 = 0, s2 = 0;
+      for (int k = rowStart[i]; k < rowStart[i + 1]; ++k) {
+        const float* v = values.data() + 9 * std::size_t(k);
+        const double* xc = xp + 3 * std::size_t(column[std::size_t(k)]);
+        const double x0 = xc[0], x1 = xc[1], x2 = xc[2];
+        s0 += double(v[0]) * x0 + double(v[1]) * x1 + double(v[2]) * x2;
+        s1 += double(v[3]) * x0 + double(v[4]) * x1 + double(v[5]) * x2;
+        s2 += double(v[6]) * x0 + double(v[7]) * x1 + double(v[8]) * x2;
+      }
+      yp[3 * i] = s0;
+      yp[3 * i + 1] = s1;
+      yp[3 * i + 2] = s2;
     }
-    yp[3 * std::size_t(i)] = s0;
-    yp[3 * std::size_t(i) + 1] = s1;
-    yp[3 * std::size_t(i) + 2] = s2;
-  }
+  }, kRowChunk);
   if (lowRank && !lowRank->empty()) lowRank->multiplyAdd(x, y);
 }
 
 namespace {
 
 // Rows [begin, end) of an upper-stored product: y_i += A_ij x_j, and A_ij^T x_i added to y_j for
-// j < end or to spill_j beyond. Plain arrays only (no Eigen types, whose layout may differ between
-// instruction sets), so the function can be built twice: for AVX2/FMA, where most of the time goes
-// into the arithmetic rather than memory, and for any x86-64, chosen when the library is loaded.
+// j < end or to spill[3 (j - end)] beyond. Plain arrays only (no Eigen types, whose layout may differ
+// between instruction sets), so the function can be built twice: for AVX2/FMA, where most of the
+// time goes into the arithmetic rather than memory, and for any x86-64, chosen when the library is
+// loaded.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
@@ -61,7 +82,7 @@ void upperRows(int begin, int end, const int* rowStart, const int* column, const
       s1 += a3 * x0 + a4 * x1 + a5 * x2;
       s2 += a6 * x0 + a7 * x1 + a8 * x2;
       if (j == i) continue;
-      double* out = (j < end ? y : spill) + 3 * std::size_t(j);
+      double* out = j < end ? y + 3 * std::size_t(j) : spill + 3 * std::size_t(j - end);
       out[0] += a0 * xi0 + a3 * xi1 + a6 * xi2;
       out[1] += a1 * xi0 + a4 * xi1 + a7 * xi2;
       out[2] += a2 * xi0 + a5 * xi1 + a8 * xi2;
@@ -72,104 +93,146 @@ void upperRows(int begin, int end, const int* rowStart, const int* column, const
   }
 }
 
+// Stored blocks per chunk of an upper-stored product, before chunks are merged to bound the spill.
+constexpr long long kBlocksPerChunk = 8192;
+
+// The row chunks of an upper-stored product, from the matrix alone: chunk c holds rows
+// [first[c], first[c + 1]) and spills into rows [first[c + 1], reach[c]).
+struct UpperChunks {
+  std::vector<int> first, reach;
+  std::vector<std::size_t> spillAt;  // chunks + 1: chunk c's spill starts at 3 spillAt[c]
+};
+
+// A power of two of chunks of about kBlocksPerChunk stored blocks each, halved (merging neighbours)
+// while all spills together would cover more rows than the matrix has: an ordering whose blocks reach
+// far gets fewer, longer chunks instead of a spill buffer many times the vector.
+UpperChunks upperChunks(const std::vector<int>& rowStart, const std::vector<int>& column, int n) {
+  const long long blocks = rowStart[std::size_t(n)];
+  std::size_t count = 1;
+  while ((long long)count * kBlocksPerChunk < blocks && count < (std::size_t(1) << 16)) count *= 2;
+  UpperChunks chunks;
+  chunks.first.resize(count + 1);
+  for (std::size_t c = 0; c < count; ++c)  // the row holding block blocks * c / count
+    chunks.first[c] = int(std::upper_bound(rowStart.begin(), rowStart.end(), (long long)(blocks * (long long)c / (long long)count)) -
+                          rowStart.begin()) - 1;
+  chunks.first[0] = 0;
+  chunks.first[count] = n;
+  chunks.reach.resize(count);
+  parallelFor(count, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c) {
+      int far = chunks.first[c + 1];
+      for (int i = chunks.first[c]; i < chunks.first[c + 1]; ++i)
+        if (rowStart[std::size_t(i) + 1] > rowStart[std::size_t(i)])
+          far = std::max(far, column[std::size_t(rowStart[std::size_t(i) + 1]) - 1] + 1);
+      chunks.reach[c] = far;
+    }
+  }, 1);
+  auto spillRows = [&] {
+    std::size_t rows = 0;
+    for (std::size_t c = 0; c < chunks.reach.size(); ++c) rows += std::size_t(chunks.reach[c] - chunks.first[c + 1]);
+    return rows;
+  };
+  while (chunks.reach.size() > 1 && spillRows() > std::size_t(n)) {
+    const std::size_t half = chunks.reach.size() / 2;
+    for (std::size_t c = 0; c < half; ++c) {
+      chunks.first[c] = chunks.first[2 * c];
+      chunks.reach[c] = std::max(chunks.reach[2 * c], chunks.reach[2 * c + 1]);
+    }
+    chunks.first[half] = n;
+    chunks.first.resize(half + 1);
+    chunks.reach.resize(half);
+  }
+  chunks.spillAt.assign(chunks.reach.size() + 1, 0);
+  for (std::size_t c = 0; c < chunks.reach.size(); ++c)
+    chunks.spillAt[c + 1] = chunks.spillAt[c] + std::size_t(chunks.reach[c] - chunks.first[c + 1]);
+  return chunks;
+}
+
 }  // namespace
 
-// Each thread takes a contiguous range of rows (split by stored blocks) and adds, for every block
-// A_ij, A_ij x_j to y_i and A_ij^T x_i to y_j. j >= i, so the second lands in the thread's own rows
-// or in later threads' rows; the latter go to the thread's spill buffer, which covers the rows from
-// its range's end to the largest column it reaches (mesh orderings keep that short), and are added
-// after all threads are done. Fixed ranges and order: the same sums on every run.
+// Each chunk of rows (a split of the stored blocks that depends on the matrix only) adds, for every
+// block A_ij, A_ij x_j to y_i and A_ij^T x_i to y_j. j >= i, so the second lands in the chunk's own
+// rows or in later chunks' rows; the latter go to the chunk's spill buffer, which covers the rows
+// from its end to the largest column it reaches. A second pass adds to each chunk's rows what earlier
+// chunks spilled into them, in chunk order: the same sums whatever the threads.
 void BlockSparseMatrix3f::multiplyUpper(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   const int n = rows();
   y.resize(3 * Eigen::Index(n));
   if (n == 0) return;
-  std::vector<int> first, reach;
-  std::vector<std::size_t> spillAt;
+  const UpperChunks chunks = upperChunks(rowStart, column, n);
+  const std::size_t count = chunks.reach.size();
+  spill_.resize(3 * chunks.spillAt.back());
   const double* xp = x.data();
   double* yp = y.data();
-#pragma omp parallel
-  {
-#pragma omp single
-    {  // the ranges, for the team actually running
-      const int threads = omp_get_num_threads();
-      first.assign(std::size_t(threads) + 1, n);
-      reach.assign(std::size_t(threads), n);
-      spillAt.assign(std::size_t(threads) + 1, 0);
-      const long long blocks = rowStart[std::size_t(n)];
-      first[0] = 0;
-      for (int t = 1; t < threads; ++t)
-        first[std::size_t(t)] = std::max(first[std::size_t(t) - 1],
-                                         int(std::upper_bound(rowStart.begin(), rowStart.end(),
-                                                              (long long)(blocks * t / threads)) - rowStart.begin()) - 1);
-      for (int t = 0; t < threads; ++t) {
-        int far = first[std::size_t(t) + 1];
-        for (int i = first[std::size_t(t)]; i < first[std::size_t(t) + 1]; ++i)
-          if (rowStart[std::size_t(i) + 1] > rowStart[std::size_t(i)])
-            far = std::max(far, column[std::size_t(rowStart[std::size_t(i) + 1]) - 1] + 1);
-        reach[std::size_t(t)] = far;
-        spillAt[std::size_t(t) + 1] = spillAt[std::size_t(t)] + 3 * std::size_t(far - first[std::size_t(t) + 1]);
+  parallelFor(count, [&](std::size_t first, std::size_t last) {
+    for (std::size_t c = first; c < last; ++c) {
+      const int begin = chunks.first[c], end = chunks.first[c + 1];
+      double* spill = spill_.data() + 3 * chunks.spillAt[c];
+      std::fill(yp + 3 * std::size_t(begin), yp + 3 * std::size_t(end), 0.0);
+      std::fill(spill, spill_.data() + 3 * chunks.spillAt[c + 1], 0.0);
+      upperRows(begin, end, rowStart.data(), column.data(), values.data(), xp, yp, spill);
+    }
+  }, 1);
+  parallelFor(count, [&](std::size_t first, std::size_t last) {
+    for (std::size_t t = first; t < last; ++t) {
+      const int begin = chunks.first[t], end = chunks.first[t + 1];
+      for (std::size_t u = 0; u < t; ++u) {
+        const int spillBegin = chunks.first[u + 1];  // row of chunk u's spill entry 0
+        const int from = std::max(begin, spillBegin), to = std::min(end, chunks.reach[u]);
+        const double* other = spill_.data() + 3 * chunks.spillAt[u];
+        for (int j = from; j < to; ++j)
+          for (int c = 0; c < 3; ++c) yp[3 * std::size_t(j) + std::size_t(c)] += other[3 * std::size_t(j - spillBegin) + std::size_t(c)];
       }
-      spill_.resize(spillAt.back());
     }
-    const int t = omp_get_thread_num();
-    const int begin = first[std::size_t(t)], end = first[std::size_t(t) + 1];
-    double* spill = spill_.data() + spillAt[std::size_t(t)] - 3 * std::size_t(end);  // indexed by 3 j
-    std::fill(yp + 3 * std::size_t(begin), yp + 3 * std::size_t(end), 0.0);
-    std::fill(spill_.data() + spillAt[std::size_t(t)], spill_.data() + spillAt[std::size_t(t) + 1], 0.0);
-    upperRows(begin, end, rowStart.data(), column.data(), values.data(), xp, yp, spill);
-#pragma omp barrier
-    // This thread's rows take what earlier threads spilled into them, in thread order.
-    for (int u = 0; u < t; ++u) {
-      const int from = std::max(begin, first[std::size_t(u) + 1]), to = std::min(end, reach[std::size_t(u)]);
-      const double* other = spill_.data() + spillAt[std::size_t(u)] - 3 * std::size_t(first[std::size_t(u) + 1]);
-      for (std::size_t k = 3 * std::size_t(from); k < 3 * std::size_t(std::max(from, to)); ++k) yp[k] += other[k];
-    }
-  }
+  }, 1);
 }
 
 void LowRankTerm3::multiplyAdd(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   const int n = int(rowStart.size()) - 1;
-  const int terms = int(weight.size());
+  const std::size_t terms = weight.size();
   if (x.size() != 3 * Eigen::Index(n) || y.size() != x.size())
     throw std::invalid_argument("LowRankTerm3: vector sizes do not match the term");
-  std::vector<double> dot(std::size_t(terms), 0.0);
-  double* d = dot.data();
-#pragma omp parallel for schedule(static, 1024) reduction(+ : d[:terms])
-  for (int i = 0; i < n; ++i)
-    for (int k = rowStart[std::size_t(i)]; k < rowStart[std::size_t(i) + 1]; ++k) {
-      const double* g = vector.data() + 3 * std::size_t(k);
-      d[term[std::size_t(k)]] += g[0] * x[3 * i] + g[1] * x[3 * i + 1] + g[2] * x[3 * i + 2];
-    }
-  for (int r = 0; r < terms; ++r) dot[std::size_t(r)] *= weight[std::size_t(r)];
-#pragma omp parallel for schedule(static, 1024)
-  for (int i = 0; i < n; ++i)
-    for (int k = rowStart[std::size_t(i)]; k < rowStart[std::size_t(i) + 1]; ++k) {
-      const double* g = vector.data() + 3 * std::size_t(k);
-      const double s = d[term[std::size_t(k)]];
-      for (int c = 0; c < 3; ++c) y[3 * i + c] += s * g[c];
-    }
+  std::vector<double> dot(terms, 0.0);
+  parallelSums(std::size_t(n), kRowChunk, terms, [&](std::size_t begin, std::size_t end, double* d) {
+    for (std::size_t i = begin; i < end; ++i)
+      for (int k = rowStart[i]; k < rowStart[i + 1]; ++k) {
+        const double* g = vector.data() + 3 * std::size_t(k);
+        const Eigen::Index o = 3 * Eigen::Index(i);
+        d[term[std::size_t(k)]] += g[0] * x[o] + g[1] * x[o + 1] + g[2] * x[o + 2];
+      }
+  }, dot.data());
+  for (std::size_t r = 0; r < terms; ++r) dot[r] *= weight[r];
+  parallelFor(std::size_t(n), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      for (int k = rowStart[i]; k < rowStart[i + 1]; ++k) {
+        const double* g = vector.data() + 3 * std::size_t(k);
+        const double s = dot[std::size_t(term[std::size_t(k)])];
+        for (int c = 0; c < 3; ++c) y[3 * Eigen::Index(i) + c] += s * g[c];
+      }
+  }, kRowChunk);
 }
 
 std::vector<Eigen::Matrix3d> blockDiagonalInverses(const BlockSparseMatrix3f& A) {
   const int n = A.rows();
   std::vector<Eigen::Matrix3d> inverse(static_cast<std::size_t>(n));
-#pragma omp parallel for schedule(static, 1024)
-  for (int i = 0; i < n; ++i) {
-    Eigen::Matrix3d D = Eigen::Matrix3d::Zero();
-    for (int k = A.rowStart[std::size_t(i)]; k < A.rowStart[std::size_t(i) + 1]; ++k)
-      if (A.column[std::size_t(k)] == i) {
-        const float* v = A.values.data() + 9 * std::size_t(k);
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) D(r, c) = double(v[3 * r + c]);
+  parallelFor(std::size_t(n), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Eigen::Matrix3d D = Eigen::Matrix3d::Zero();
+      for (int k = A.rowStart[i]; k < A.rowStart[i + 1]; ++k)
+        if (std::size_t(A.column[std::size_t(k)]) == i) {
+          const float* v = A.values.data() + 9 * std::size_t(k);
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) D(r, c) = double(v[3 * r + c]);
+        }
+      const double scale = D.cwiseAbs().maxCoeff();
+      if (scale > 0 && std::abs(D.determinant()) > 1e-12 * scale * scale * scale) {
+        inverse[i] = D.inverse();
+      } else {
+        inverse[i].setZero();
+        for (int r = 0; r < 3; ++r) inverse[i](r, r) = D(r, r) > 0 ? 1.0 / D(r, r) : 0.0;
       }
-    const double scale = D.cwiseAbs().maxCoeff();
-    if (scale > 0 && std::abs(D.determinant()) > 1e-12 * scale * scale * scale) {
-      inverse[std::size_t(i)] = D.inverse();
-    } else {
-      inverse[std::size_t(i)].setZero();
-      for (int r = 0; r < 3; ++r) inverse[std::size_t(i)](r, r) = D(r, r) > 0 ? 1.0 / D(r, r) : 0.0;
     }
-  }
+  }, kRowChunk);
   return inverse;
 }
 
@@ -189,9 +252,9 @@ double rightHandSideNorm(const char* solver, const BlockSparseMatrix3f& A, const
 void nextDirection(double rzNew, double& rz, const Eigen::VectorXd& z, Eigen::VectorXd& p) {
   const double beta = rzNew / rz;
   rz = rzNew;
-  const Eigen::Index m = p.size();
-#pragma omp parallel for schedule(static, 4096)
-  for (Eigen::Index k = 0; k < m; ++k) p[k] = z[k] + beta * p[k];
+  parallelFor(std::size_t(p.size()), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) p[Eigen::Index(k)] = z[Eigen::Index(k)] + beta * p[Eigen::Index(k)];
+  }, kScalarChunk);
 }
 
 BlockCgResult finished(int iterations, double rNorm, double bNorm) {
@@ -215,44 +278,44 @@ BlockCgResult blockJacobiCg(const BlockSparseMatrix3f& A, const Eigen::VectorXd&
   const Eigen::Index m = b.size();
   Eigen::VectorXd r(m), z(m), p(m), q(m);
   A.multiply(x, q);
-  double rr = 0, rz = 0;
-#pragma omp parallel for schedule(static, 512) reduction(+ : rr, rz)
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Index o = 3 * Eigen::Index(i);
-    const Eigen::Vector3d ri = b.segment<3>(o) - q.segment<3>(o);
-    const Eigen::Vector3d zi = inverse[std::size_t(i)] * ri;
-    r.segment<3>(o) = ri;
-    z.segment<3>(o) = zi;
-    p.segment<3>(o) = zi;
-    rr += ri.squaredNorm();
-    rz += ri.dot(zi);
-  }
+  double sums[2];  // r . r, r . z
+  parallelSums(std::size_t(n), kRowChunk, 2, [&](std::size_t begin, std::size_t end, double* s) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Index o = 3 * Eigen::Index(i);
+      const Eigen::Vector3d ri = b.segment<3>(o) - q.segment<3>(o);
+      const Eigen::Vector3d zi = inverse[i] * ri;
+      r.segment<3>(o) = ri;
+      z.segment<3>(o) = zi;
+      p.segment<3>(o) = zi;
+      s[0] += ri.squaredNorm();
+      s[1] += ri.dot(zi);
+    }
+  }, sums);
+  double rz = sums[1];
   const double threshold = tolerance * bNorm;
-  double rNorm = std::sqrt(rr);
+  double rNorm = std::sqrt(sums[0]);
   int it = 0;
   while (rNorm > threshold && it < maxIterations) {
     A.multiply(p, q);
-    double pq = 0;
-#pragma omp parallel for schedule(static, 4096) reduction(+ : pq)
-    for (Eigen::Index k = 0; k < m; ++k) pq += p[k] * q[k];
+    const double pq = dot(p, q);
     if (!(pq > 0.0)) break;  // no descent left (semi-definite direction)
     const double alpha = rz / pq;
-    double rrNew = 0, rzNew = 0;
-#pragma omp parallel for schedule(static, 512) reduction(+ : rrNew, rzNew)
-    for (int i = 0; i < n; ++i) {
-      const Eigen::Index o = 3 * Eigen::Index(i);
-      x.segment<3>(o) += alpha * p.segment<3>(o);
-      const Eigen::Vector3d ri = r.segment<3>(o) - alpha * q.segment<3>(o);
-      const Eigen::Vector3d zi = inverse[std::size_t(i)] * ri;
-      r.segment<3>(o) = ri;
-      z.segment<3>(o) = zi;
-      rrNew += ri.squaredNorm();
-      rzNew += ri.dot(zi);
-    }
+    parallelSums(std::size_t(n), kRowChunk, 2, [&](std::size_t begin, std::size_t end, double* s) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const Eigen::Index o = 3 * Eigen::Index(i);
+        x.segment<3>(o) += alpha * p.segment<3>(o);
+        const Eigen::Vector3d ri = r.segment<3>(o) - alpha * q.segment<3>(o);
+        const Eigen::Vector3d zi = inverse[i] * ri;
+        r.segment<3>(o) = ri;
+        z.segment<3>(o) = zi;
+        s[0] += ri.squaredNorm();
+        s[1] += ri.dot(zi);
+      }
+    }, sums);
     ++it;
-    rNorm = std::sqrt(rrNew);
+    rNorm = std::sqrt(sums[0]);
     if (rNorm <= threshold) break;
-    nextDirection(rzNew, rz, z, p);
+    nextDirection(sums[1], rz, z, p);
   }
   return finished(it, rNorm, bNorm);
 }
@@ -265,12 +328,14 @@ BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::V
   const Eigen::Index m = b.size();
   Eigen::VectorXd r(m), z(m), p(m), q(m);
   A.multiply(x, q);
-  double rr = 0;
-#pragma omp parallel for schedule(static, 4096) reduction(+ : rr)
-  for (Eigen::Index k = 0; k < m; ++k) {
-    r[k] = b[k] - q[k];
-    rr += r[k] * r[k];
-  }
+  const double rr = parallelSum(std::size_t(m), kScalarChunk, [&](std::size_t begin, std::size_t end) {
+    double s = 0;
+    for (Eigen::Index k = Eigen::Index(begin); k < Eigen::Index(end); ++k) {
+      r[k] = b[k] - q[k];
+      s += r[k] * r[k];
+    }
+    return s;
+  });
   const double threshold = tolerance * bNorm;
   double rNorm = std::sqrt(rr);
   int it = 0;
@@ -281,18 +346,18 @@ BlockCgResult preconditionedBlockCg(const BlockSparseMatrix3f& A, const Eigen::V
   }
   while (rNorm > threshold && it < maxIterations) {
     A.multiply(p, q);
-    double pq = 0;
-#pragma omp parallel for schedule(static, 4096) reduction(+ : pq)
-    for (Eigen::Index k = 0; k < m; ++k) pq += p[k] * q[k];
+    const double pq = dot(p, q);
     if (!(pq > 0.0)) break;
     const double alpha = rz / pq;
-    double rrNew = 0;
-#pragma omp parallel for schedule(static, 4096) reduction(+ : rrNew)
-    for (Eigen::Index k = 0; k < m; ++k) {
-      x[k] += alpha * p[k];
-      r[k] -= alpha * q[k];
-      rrNew += r[k] * r[k];
-    }
+    const double rrNew = parallelSum(std::size_t(m), kScalarChunk, [&](std::size_t begin, std::size_t end) {
+      double s = 0;
+      for (Eigen::Index k = Eigen::Index(begin); k < Eigen::Index(end); ++k) {
+        x[k] += alpha * p[k];
+        r[k] -= alpha * q[k];
+        s += r[k] * r[k];
+      }
+      return s;
+    });
     ++it;
     rNorm = std::sqrt(rrNew);
     if (rNorm <= threshold) break;

@@ -36,7 +36,7 @@ struct BlockSparseMatrix3f {
 
  private:
   void multiplyUpper(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
-  mutable std::vector<double> spill_;  // multiplyUpper's per-thread sums for other threads' rows
+  mutable std::vector<double> spill_;  // multiplyUpper's per-chunk sums for later chunks' rows
 };
 
 struct BlockCgResult {

@@ -220,7 +220,8 @@ class SpdSolver {
       residual = cg.error();
     } else {
       // A is symmetric with both triangles stored, so its column-major arrays are also its row-major
-      // ones: seen row-major, Eigen's CG runs its matrix-vector products on OpenMP threads.
+      // ones: seen row-major, Eigen's CG gathers its matrix-vector products row by row. (Single-
+      // threaded: the core is built without OpenMP, so Eigen starts no threads of its own.)
       const Eigen::Map<const RowSpMat> rows(A.rows(), A.cols(), A.nonZeros(), A.outerIndexPtr(), A.innerIndexPtr(),
                                             A.valuePtr());
       Eigen::ConjugateGradient<RowSpMat, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg;

@@ -9,7 +9,8 @@
 #include <numeric>
 #include <stdexcept>
 
-#include <omp.h>
+#include "parallel_for.h"
+#include "parallel_sum.h"
 
 namespace repose {
 namespace {
@@ -17,6 +18,10 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+// Rows per chunk of the threaded passes over the nodes; sums are taken per chunk of this fixed
+// size and then in chunk order (parallel_sum.h), so apply() does not depend on the thread count.
+constexpr std::size_t kRowChunk = 512;
 
 /// S with S w = w x d: the displacement of a node at offset d under the infinitesimal rotation w.
 Mat3 rotationModes(const Vec3& d) {
@@ -71,7 +76,7 @@ struct TwoLevelPreconditioner::Impl {
   // from the rounded offsets, so P^T and P stay each other's transposes (M stays symmetric).
   std::vector<Eigen::Matrix3f> diagonalInverse;
   std::vector<Eigen::Vector3f> offset;  // node minus its aggregate's centroid, over the aggregate's rms radius
-  mutable Eigen::VectorXd coarseRhs, coarseSolution, partial;
+  mutable Eigen::VectorXd coarseRhs, coarseSolution;
   bool useCoarse = true;
 
   // The matrix's low-rank term G K G^T, if any, joins the fine level by Woodbury's identity:
@@ -109,48 +114,40 @@ struct TwoLevelPreconditioner::Impl {
   double subtractLowRank(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
     const LowRankTerm3& L = *lowRank;
     const int terms = int(L.weight.size());
-    lowRankDot.setZero(terms);
-    double* t = lowRankDot.data();
-#pragma omp parallel for schedule(static, 1024) reduction(+ : t[:terms])
-    for (int i = 0; i < n; ++i)
-      for (int k = L.rowStart[std::size_t(i)]; k < L.rowStart[std::size_t(i) + 1]; ++k)
-        t[L.term[std::size_t(k)]] += Vec3(scaledVectors.data() + 3 * std::size_t(k)).dot(r.segment<3>(3 * Eigen::Index(i)));
+    lowRankDot.resize(terms);
+    parallelSums(std::size_t(n), kRowChunk, std::size_t(terms), [&](std::size_t begin, std::size_t end, double* t) {
+      for (std::size_t i = begin; i < end; ++i)
+        for (int k = L.rowStart[i]; k < L.rowStart[i + 1]; ++k)
+          t[L.term[std::size_t(k)]] += Vec3(scaledVectors.data() + 3 * std::size_t(k)).dot(r.segment<3>(3 * Eigen::Index(i)));
+    }, lowRankDot.data());
     const Eigen::VectorXd y = lowRankSolve * lowRankDot;
-#pragma omp parallel for schedule(static, 1024)
-    for (int i = 0; i < n; ++i)
-      for (int k = L.rowStart[std::size_t(i)]; k < L.rowStart[std::size_t(i) + 1]; ++k)
-        z.segment<3>(3 * Eigen::Index(i)) -= y[L.term[std::size_t(k)]] * Vec3(scaledVectors.data() + 3 * std::size_t(k));
+    parallelFor(std::size_t(n), [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        for (int k = L.rowStart[i]; k < L.rowStart[i + 1]; ++k)
+          z.segment<3>(3 * Eigen::Index(i)) -= y[L.term[std::size_t(k)]] * Vec3(scaledVectors.data() + 3 * std::size_t(k));
+    }, kRowChunk);
     return -lowRankDot.dot(y);
   }
 
-  /// coarseRhs = P^T r, in node order (a gather per aggregate would jump through r) into one
-  /// coarse vector per thread, summed afterwards.
+  /// coarseRhs = P^T r, in node order (a gather per aggregate would jump through r): one coarse
+  /// vector per chunk of nodes, summed afterwards. At most eight chunks, whatever n: each costs a
+  /// coarse vector to clear and add.
   void restrictTo(const Eigen::VectorXd& r) const {
     const int nc = coarseOffset.back();
     coarseRhs.resize(nc);
-    const int threads = omp_get_max_threads();
-    partial.setZero(Eigen::Index(threads) * nc);  // all of it: the team may be smaller
-#pragma omp parallel
-    {
-      double* sum = partial.data() + std::size_t(omp_get_thread_num()) * std::size_t(nc);
-#pragma omp for schedule(static)
-      for (int i = 0; i < n; ++i) {
-        const int a = aggregateOf[std::size_t(i)];
+    const std::size_t chunk = std::max<std::size_t>(1024, (std::size_t(n) + 7) / 8);
+    parallelSums(std::size_t(n), chunk, std::size_t(nc), [&](std::size_t begin, std::size_t end, double* sum) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const int a = aggregateOf[i];
         const Vec3 ri = r.segment<3>(3 * Eigen::Index(i));
         double* c = sum + coarseOffset[std::size_t(a)];
         c[0] += ri.x(), c[1] += ri.y(), c[2] += ri.z();
         if (modes[std::size_t(a)] == 6) {
-          const Vec3 torque = offset[std::size_t(i)].cast<double>().cross(ri);
+          const Vec3 torque = offset[i].cast<double>().cross(ri);
           c[3] += torque.x(), c[4] += torque.y(), c[5] += torque.z();
         }
       }
-#pragma omp for schedule(static)
-      for (int k = 0; k < nc; ++k) {
-        double total = 0;
-        for (int t = 0; t < threads; ++t) total += partial[Eigen::Index(t) * nc + k];
-        coarseRhs[k] = total;
-      }
-    }
+    }, coarseRhs.data());
   }
 
   /// z = D^-1 r + P Ac^-1 P^T r; returns r . z.
@@ -160,19 +157,21 @@ struct TwoLevelPreconditioner::Impl {
       coarseSolution = llt.solve(coarseRhs);
     }
     z.resize(r.size());
-    double rz = 0;
-#pragma omp parallel for schedule(static, 512) reduction(+ : rz)
-    for (int i = 0; i < n; ++i) {
-      Vec3 zi = diagonalInverse[std::size_t(i)].cast<double>() * r.segment<3>(3 * Eigen::Index(i));
-      if (useCoarse) {
-        const int a = aggregateOf[std::size_t(i)];
-        const int o = coarseOffset[std::size_t(a)];
-        zi += coarseSolution.segment<3>(o);
-        if (modes[std::size_t(a)] == 6) zi += coarseSolution.segment<3>(o + 3).cross(offset[std::size_t(i)].cast<double>());
+    double rz = parallelSum(std::size_t(n), kRowChunk, [&](std::size_t begin, std::size_t end) {
+      double sum = 0;
+      for (std::size_t i = begin; i < end; ++i) {
+        Vec3 zi = diagonalInverse[i].cast<double>() * r.segment<3>(3 * Eigen::Index(i));
+        if (useCoarse) {
+          const int a = aggregateOf[i];
+          const int o = coarseOffset[std::size_t(a)];
+          zi += coarseSolution.segment<3>(o);
+          if (modes[std::size_t(a)] == 6) zi += coarseSolution.segment<3>(o + 3).cross(offset[i].cast<double>());
+        }
+        z.segment<3>(3 * Eigen::Index(i)) = zi;
+        sum += zi.dot(r.segment<3>(3 * Eigen::Index(i)));
       }
-      z.segment<3>(3 * Eigen::Index(i)) = zi;
-      rz += zi.dot(r.segment<3>(3 * Eigen::Index(i)));
-    }
+      return sum;
+    });
     if (lowRank) rz += subtractLowRank(r, z);
     return rz;
   }
@@ -399,20 +398,21 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
   // Rigid modes about the current centroids, offsets scaled by the aggregate's rms radius so that
   // rotation and translation entries of Ac have similar magnitudes.
   s.offset.resize(std::size_t(s.n));
-#pragma omp parallel for schedule(dynamic, 16)
-  for (int a = 0; a < m; ++a) {
-    const int b = s.nodeStart[std::size_t(a)], e = s.nodeStart[std::size_t(a) + 1];
-    Vec3 centroid = Vec3::Zero();
-    for (int k = b; k < e; ++k) centroid += positions.row(s.node[std::size_t(k)]).transpose();
-    centroid /= double(e - b);
-    double r2 = 0;
-    for (int k = b; k < e; ++k) r2 += (positions.row(s.node[std::size_t(k)]).transpose() - centroid).squaredNorm();
-    const double scale = r2 > 0 ? 1.0 / std::sqrt(r2 / double(e - b)) : 1.0;
-    for (int k = b; k < e; ++k) {
-      const int i = s.node[std::size_t(k)];
-      s.offset[std::size_t(i)] = (scale * (positions.row(i).transpose() - centroid)).cast<float>();
+  parallelFor(std::size_t(m), [&](std::size_t first, std::size_t last) {
+    for (int a = int(first); a < int(last); ++a) {
+      const int b = s.nodeStart[std::size_t(a)], e = s.nodeStart[std::size_t(a) + 1];
+      Vec3 centroid = Vec3::Zero();
+      for (int k = b; k < e; ++k) centroid += positions.row(s.node[std::size_t(k)]).transpose();
+      centroid /= double(e - b);
+      double r2 = 0;
+      for (int k = b; k < e; ++k) r2 += (positions.row(s.node[std::size_t(k)]).transpose() - centroid).squaredNorm();
+      const double scale = r2 > 0 ? 1.0 / std::sqrt(r2 / double(e - b)) : 1.0;
+      for (int k = b; k < e; ++k) {
+        const int i = s.node[std::size_t(k)];
+        s.offset[std::size_t(i)] = (scale * (positions.row(i).transpose() - centroid)).cast<float>();
+      }
     }
-  }
+  }, 16);
 
   // Ac = P^T A P, one aggregate (block row of Ac) per task: P_i = [I | S_i]. Row i of A P is first
   // summed per neighbouring aggregate b, C_ib = sum_j A_ij [I | S_j], then P_i^T C_ib added to the
@@ -422,15 +422,14 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
   using Mat36 = Eigen::Matrix<double, 3, 6>;
   if (A.upper) s.halfProduct.resize(std::size_t(s.valueStart.back()));
   double* values = A.upper ? s.halfProduct.data() : s.Ac.valuePtr();
-#pragma omp parallel
-  {
+  // Each task has its own scratch (slot is back at -1 for all aggregates after each one).
+  parallelFor(std::size_t(m), [&](std::size_t first, std::size_t last) {
     std::vector<int> slot(std::size_t(m), -1);
     std::vector<Mat6> block;
     std::vector<Mat36> row;
     std::vector<int> touched;
     std::vector<char> inRow;
-#pragma omp for schedule(dynamic, 8)
-    for (int a = 0; a < m; ++a) {
+    for (int a = int(first); a < int(last); ++a) {
       const int nb = s.neighbourStart[std::size_t(a)], ne = s.neighbourStart[std::size_t(a) + 1];
       block.assign(std::size_t(ne - nb), Mat6::Zero());
       row.resize(std::size_t(ne - nb));
@@ -472,23 +471,24 @@ void TwoLevelPreconditioner::update(const BlockSparseMatrix3f& A, const Points& 
                 block[std::size_t(e - nb)](c, d);
       }
     }
-  }
+  }, 16);
   if (A.upper) {
     double* full = s.Ac.valuePtr();
-#pragma omp parallel for schedule(dynamic, 64)
-    for (int a = 0; a < m; ++a) {
-      const int ma = s.modes[std::size_t(a)], len = s.rowLength[std::size_t(a)];
-      for (int e = s.neighbourStart[std::size_t(a)]; e < s.neighbourStart[std::size_t(a) + 1]; ++e) {
-        const int b = s.neighbour[std::size_t(e)], back = s.mirror[std::size_t(e)];
-        const int mb = s.modes[std::size_t(b)], lenB = s.rowLength[std::size_t(b)];
-        for (int c = 0; c < ma; ++c)
-          for (int d = 0; d < mb; ++d) {
-            const int here = s.valueStart[std::size_t(a)] + c * len + s.neighbourPrefix[std::size_t(e)] + d;
-            const int there = s.valueStart[std::size_t(b)] + d * lenB + s.neighbourPrefix[std::size_t(back)] + c;
-            full[here] = s.halfProduct[std::size_t(here)] + s.halfProduct[std::size_t(there)];
-          }
+    parallelFor(std::size_t(m), [&](std::size_t first, std::size_t last) {
+      for (int a = int(first); a < int(last); ++a) {
+        const int ma = s.modes[std::size_t(a)], len = s.rowLength[std::size_t(a)];
+        for (int e = s.neighbourStart[std::size_t(a)]; e < s.neighbourStart[std::size_t(a) + 1]; ++e) {
+          const int b = s.neighbour[std::size_t(e)], back = s.mirror[std::size_t(e)];
+          const int mb = s.modes[std::size_t(b)], lenB = s.rowLength[std::size_t(b)];
+          for (int c = 0; c < ma; ++c)
+            for (int d = 0; d < mb; ++d) {
+              const int here = s.valueStart[std::size_t(a)] + c * len + s.neighbourPrefix[std::size_t(e)] + d;
+              const int there = s.valueStart[std::size_t(b)] + d * lenB + s.neighbourPrefix[std::size_t(back)] + c;
+              full[here] = s.halfProduct[std::size_t(here)] + s.halfProduct[std::size_t(there)];
+            }
+        }
       }
-    }
+    }, 64);
   }
   if (!s.analyzed) {
     s.llt.setMode(Eigen::CholmodAuto);
