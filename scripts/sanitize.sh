@@ -18,5 +18,7 @@ cmake --build "$build" --target $targets
 cd "$build"
 # Leaks too; a unit test's process is short, so every allocation it forgets is reported.
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
+# The leaks we accept (TetGen's error path) are listed, with why, in the suppressions file.
+export LSAN_OPTIONS="suppressions=$root/scripts/sanitize-suppressions.txt:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 ctest -L unit --output-on-failure -j 2 "$@"
