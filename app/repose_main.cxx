@@ -358,7 +358,7 @@ int runPhantom(const Options& o) {
   const std::string outDir = o.require("out");
   auto phantom = makePhantom(o.get("size", "small"), o.get("rest-pose", "apart"));
   repose::AtomicOutputs out(outDir);
-  repose::writeImage(phantom->GetOutput(), out.stage("labels.nii.gz"));
+  repose::writeLabelImage(phantom->GetOutput(), out.stage("labels.nii.gz"));
   repose::writeTextFile(out.stage("skeleton.json"), phantom->GetSkeletonJSON());
   repose::writeTextFile(out.stage("labels.tsv"), phantom->GetLabelTableTSV());
   out.commit();
@@ -508,7 +508,7 @@ int runRig(const Options& o) {
   repose::AtomicOutputs files(dir);
   repose::writeTextFile(files.stage(out.filename().string()), r.skeletonJson);
   if (r.relabelled) {
-    repose::writeImage(r.labels, files.stage("labels_rigged.nii.gz"));
+    repose::writeLabelImage(r.labels, files.stage("labels_rigged.nii.gz"));
     repose::writeTextFile(files.stage("labels_rigged.tsv"), r.tableTsv);
   }
   files.commit();
@@ -595,7 +595,7 @@ void writePosed(repose::Pipeline& pipeline, repose::AtomicOutputs& out, const st
                 const std::string& imageExt) {
   repose::writeMesh(pipeline.posedMesh(), out.stage("posed_mesh.vtu"));
   repose::writeSurfaces(pipeline.posedSurfaces(), out.stage("posed_surfaces.vtp"));
-  repose::writeImage(pipeline.posedLabels(), out.stage("posed_labels" + labelsExt));
+  repose::writeLabelImage(pipeline.posedLabels(), out.stage("posed_labels" + labelsExt));
   writeLabelTables(pipeline, out, "posed_labels");
   if (vtkImageData* image = pipeline.posedImage()) repose::writeImage(image, out.stage("posed_image" + imageExt));
 }
@@ -1051,7 +1051,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
     csv << f << "," << time << "," << pipeline.posedMeshVolume() / restVolume << "," << posing * 1e3;
     if (labels) {
       std::snprintf(name, sizeof(name), "frames/labels_%05d", f);
-      repose::writeImage(labels, out.stage(name + volumeExt));
+      repose::writeLabelImage(labels, out.stage(name + volumeExt));
       if (volumesInPvd) entries.push_back({time, volumePart, name + volumeExt});
       const auto counts = labelCounts(labels);
       for (const auto& [label, count] : restCounts) {
@@ -1140,7 +1140,7 @@ int runDemo(const Options& o, int argc, char** argv) {
   const std::string skeletonJson = phantom->GetSkeletonJSON();
 
   repose::AtomicOutputs out(outDir);
-  repose::writeImage(labels, out.stage("rest_labels.nii.gz"));
+  repose::writeLabelImage(labels, out.stage("rest_labels.nii.gz"));
   repose::writeTextFile(out.stage("skeleton.json"), skeletonJson);
   repose::writeTextFile(out.stage("pose.json"), kDemoPose);
   repose::writeTextFile(out.stage("labels.tsv"), phantom->GetLabelTableTSV());

@@ -304,16 +304,23 @@ vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path) {
   return image;
 }
 
-void writeImage(vtkImageData* image, const std::string& path) {
+namespace {
+void writeImageAs(vtkImageData* image, const std::string& path, bool smallestIntegerType) {
   const QuietStderr quiet;
   auto writer = vtkSmartPointer<vtkReposeImageWriter>::New();
   writer->SetFileName(path.c_str());
+  writer->SetSmallestIntegerType(smallestIntegerType);
   writer->SetInputData(image);
   if (!writer->Write()) {
     const char* err = writer->GetLastError();
     throw std::runtime_error(err && *err ? std::string(err) : path + ": cannot write image");
   }
 }
+}  // namespace
+
+void writeImage(vtkImageData* image, const std::string& path) { writeImageAs(image, path, false); }
+
+void writeLabelImage(vtkImageData* labels, const std::string& path) { writeImageAs(labels, path, true); }
 
 void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path) {
   auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
@@ -513,7 +520,7 @@ void Pipeline::saveCase(const std::string& caseDir, const std::string& labelsExt
   writeMesh(restMesh_, out.stage("mesh.vtu"));
   writeSurfaces(restSurfaces_, out.stage("surfaces.vtp"));
   writeTextFile(out.stage("skeleton.json"), skeletonJson_);
-  writeImage(restLabels_, out.stage("labels" + labelsExtension));
+  writeLabelImage(restLabels_, out.stage("labels" + labelsExtension));
   writeTextFile(out.stage("labels.tsv"), labelTableTsv_.empty() ? genericCaseTable() : labelTableTsv_);
 
   Json::Value manifest;

@@ -56,6 +56,9 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path);
 vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path);
 /// Writes an image, format from the extension; throws std::runtime_error naming the file.
 void writeImage(vtkImageData* image, const std::string& path);
+/// writeImage for label volumes: written in the smallest integer type that holds the labels
+/// (vtkReposeImageWriter::SmallestIntegerType), e.g. unsigned char for up to 255.
+void writeLabelImage(vtkImageData* labels, const std::string& path);
 void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path);
 void writeSurfaces(vtkPolyData* surfaces, const std::string& path);
 /// Runs a VTK filter; throws std::runtime_error "`what` failed: <the filter's own error>" on failure.

@@ -309,7 +309,7 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   {
     vtkSmartPointer<vtkImageData> image = repose_vtk::ToImage<vtkIntArray>(labels, "Labels");
     std::vector<std::int32_t>().swap(labels.data);  // the image holds the only copy while it is written
-    writeImage(image, files.stage(out.filename().string()));
+    writeLabelImage(image, files.stage(out.filename().string()));
   }
   writeTextFile(files.stage(std::filesystem::path(tablePathFor(outPath)).filename().string()), labelTableToTsv(table));
   std::unique_ptr<AtomicOutputs> skeletonFiles;  // only when the skeleton goes to another folder

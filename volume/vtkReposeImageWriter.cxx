@@ -8,6 +8,7 @@
 #include "vtkObjectFactory.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
+#include "vtkSmartPointer.h"
 #include "vtkXMLImageDataWriter.h"
 
 #include "itkImage.h"
@@ -139,6 +140,51 @@ void WriteVti(vtkImageData* input, const std::string& fileName)
   }
 }
 
+// The smallest VTK integer type that holds [lo, hi], or `type` itself when none is smaller.
+int SmallestIntegerType(int type, double lo, double hi)
+{
+  if (lo >= 0 && hi <= VTK_UNSIGNED_CHAR_MAX)
+  {
+    return VTK_UNSIGNED_CHAR;
+  }
+  if (lo >= 0 && hi <= VTK_UNSIGNED_SHORT_MAX && vtkDataArray::GetDataTypeSize(type) > 2)
+  {
+    return VTK_UNSIGNED_SHORT;
+  }
+  if (lo >= VTK_SHORT_MIN && hi <= VTK_SHORT_MAX && vtkDataArray::GetDataTypeSize(type) > 2)
+  {
+    return VTK_SHORT;
+  }
+  return type;
+}
+
+// `input` cast to the smallest integer type holding its values (see SmallestIntegerType), or
+// `input` itself when it is not an integer image or is already that small.
+vtkSmartPointer<vtkImageData> WithSmallestIntegerType(vtkImageData* input)
+{
+  vtkDataArray* scalars = input->GetPointData()->GetScalars();
+  const int type = input->GetScalarType();
+  if (scalars->GetNumberOfComponents() != 1 || type == VTK_FLOAT || type == VTK_DOUBLE)
+  {
+    return input;
+  }
+  double range[2];
+  scalars->GetRange(range);
+  const int smallest = SmallestIntegerType(type, range[0], range[1]);
+  if (smallest == type)
+  {
+    return input;
+  }
+  // CopyStructure keeps the extent, origin, spacing and direction; DeepCopy converts the values.
+  auto narrowed = vtkSmartPointer<vtkImageData>::New();
+  narrowed->CopyStructure(input);
+  vtkSmartPointer<vtkDataArray> values = vtk::TakeSmartPointer(vtkDataArray::CreateDataArray(smallest));
+  values->DeepCopy(scalars);
+  values->SetName(scalars->GetName());
+  narrowed->GetPointData()->SetScalars(values);
+  return narrowed;
+}
+
 void WriteByType(vtkImageData* input, const std::string& fileName, bool compress)
 {
   if (input->GetPointData()->GetScalars()->GetNumberOfComponents() == 3)
@@ -158,6 +204,9 @@ void WriteByType(vtkImageData* input, const std::string& fileName, bool compress
     case VTK_UNSIGNED_CHAR:
       WriteWithItk<unsigned char>(input, fileName, compress);
       break;
+    case VTK_UNSIGNED_SHORT:
+      WriteWithItk<unsigned short>(input, fileName, compress);
+      break;
     case VTK_FLOAT:
       WriteWithItk<float>(input, fileName, compress);
       break;
@@ -166,7 +215,7 @@ void WriteByType(vtkImageData* input, const std::string& fileName, bool compress
       break;
     default:
       throw std::runtime_error(std::string("unsupported scalar type ") + input->GetScalarTypeAsString() +
-        " (use int, short, unsigned char, float or double)");
+        " (use int, short, unsigned short, unsigned char, float or double)");
   }
 }
 }
@@ -215,7 +264,7 @@ int vtkReposeImageWriter::RequestData(
   return this->WriteImage(input);
 }
 
-int vtkReposeImageWriter::WriteImage(vtkImageData* input)
+int vtkReposeImageWriter::WriteImage(vtkImageData* given)
 {
   const std::string target = this->FileName ? this->FileName : "";
   auto fail = [this, &target](const std::string& reason) {
@@ -227,10 +276,12 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* input)
   {
     return fail("no file name set");
   }
-  if (!input || !input->GetPointData()->GetScalars() || input->GetNumberOfPoints() < 1)
+  if (!given || !given->GetPointData()->GetScalars() || given->GetNumberOfPoints() < 1)
   {
     return fail("input has no image scalars");
   }
+  const vtkSmartPointer<vtkImageData> input =
+    this->SmallestIntegerType ? WithSmallestIntegerType(given) : vtkSmartPointer<vtkImageData>(given);
   const int components = input->GetPointData()->GetScalars()->GetNumberOfComponents();
   if (components != 1 && !(components == 3 && input->GetScalarType() == VTK_FLOAT))
   {

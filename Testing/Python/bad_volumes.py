@@ -18,9 +18,14 @@ os.makedirs(f"{work}/in")
 failures = []
 skeleton = f"{TINY}/phantom/skeleton.json"
 nifti = gzip.decompress(open(f"{TINY}/phantom/labels.nii.gz", "rb").read())
-header, voxels = nifti[:352], nifti[352:]
-assert struct.unpack_from("<h", header, 70)[0] == 8, "the phantom is int32"
-labels = np.frombuffer(voxels, np.int32)
+# The phantom's labels are written in the smallest integer type; the damage below is done to an int32
+# copy (NIfTI datatype 8), whose header fields and voxel bytes the edits address.
+datatype = struct.unpack_from("<h", nifti, 70)[0]
+labels = np.frombuffer(nifti[352:], {2: np.uint8, 4: np.int16, 512: np.uint16, 8: np.int32}[datatype]).astype(np.int32)
+header = bytearray(nifti[:352])
+struct.pack_into("<hh", header, 70, 8, 32)
+header, voxels = bytes(header), labels.tobytes()
+nifti = header + voxels
 
 
 def put(name, data, compress=None):

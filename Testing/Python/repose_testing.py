@@ -143,7 +143,8 @@ def read_mha(path):
         raw = zlib.decompress(raw)
     dims = [int(d) for d in header["DimSize"].split()]
     channels = int(header.get("ElementNumberOfChannels", "1"))
-    dtype = {"MET_FLOAT": np.float32, "MET_INT": np.int32, "MET_SHORT": np.int16, "MET_UCHAR": np.uint8}[header["ElementType"]]
+    dtype = {"MET_FLOAT": np.float32, "MET_INT": np.int32, "MET_SHORT": np.int16, "MET_USHORT": np.uint16,
+             "MET_UCHAR": np.uint8}[header["ElementType"]]
     return np.frombuffer(raw, dtype=dtype).reshape(dims[2], dims[1], dims[0], channels), header
 
 

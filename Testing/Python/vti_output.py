@@ -2,16 +2,24 @@
 posed_labels.ctbl as 3D Slicer reads colour tables) for every label of the posed volume; `pose --format vti` writes the posed labels as VTK XML image data with the
 direction matrix (read back by VTK's own reader: the same grid and voxels as the NIfTI output, and
 the posed mesh's nodes fall on labelled voxels through that geometry); `animate --volumes --format vti`
-lists each frame's label volume in animation.pvd beside its mesh and surfaces."""
+lists each frame's label volume in animation.pvd beside its mesh and surfaces. Label volumes are
+written in the smallest integer type that holds them (unsigned char up to 255 labels, unsigned short,
+short; int otherwise), the case's own labels too, with every value kept."""
+import gzip
+import struct
 import os
 import shutil
 import sys
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkIOXML import vtkXMLImageDataReader
 
+from vtkmodules.vtkCommonCore import VTK_UNSIGNED_CHAR
+from vtkmodules.vtkCommonDataModel import vtkImageData
+
+from repose import vtkReposeImageWriter
 from repose_testing import SHARED, TEMP, TESTING, TINY, Image, Mesh, check, run
 
 failures = []
@@ -68,5 +76,29 @@ code, _, err = run("animate", "--case", f"{TINY}/case", "--bvh", bvh, "--format"
                    check=False)
 check(code == 2 and "--format" in err and not os.path.exists(f"{work}/none"),
       f"--format without volumes is refused: {err.strip()}", failures)
+
+
+def nifti_datatype(path):
+    with gzip.open(path) as f:
+        return struct.unpack_from("<h", f.read(352), 70)[0]
+
+
+check(nifti_datatype(f"{work}/nii/posed_labels.nii.gz") == 2 and nifti_datatype(f"{TINY}/case/labels.nii.gz") == 2
+      and vti.GetScalarType() == VTK_UNSIGNED_CHAR,
+      "the tiny phantom's posed labels (NIfTI, .vti) and its case's labels are unsigned char", failures)
+# The writer on its own: each range gets the smallest type that holds it, values unchanged.
+for values, datatype in (([0, 7, 255], 2), ([0, 300, 65535], 512), ([-5, 0, 300], 4), ([0, 70000], 8)):
+    image = vtkImageData()
+    image.SetDimensions(len(values), 1, 1)
+    image.GetPointData().SetScalars(numpy_to_vtk(np.array(values, np.int32), deep=True))
+    writer = vtkReposeImageWriter()
+    writer.SetFileName(f"{work}/range.nii.gz")
+    writer.SmallestIntegerTypeOn()
+    writer.SetInputData(image)
+    ok = writer.Write() == 1
+    back = Image(f"{work}/range.nii.gz").a.ravel()
+    check(ok and nifti_datatype(f"{work}/range.nii.gz") == datatype and back.tolist() == values,
+          f"labels {values} written as NIfTI datatype {nifti_datatype(f'{work}/range.nii.gz')} "
+          f"(expected {datatype}), read back {back.tolist()}", failures)
 print(f"{len(failures)} failed")
 sys.exit(1 if failures else 0)

@@ -75,7 +75,7 @@ bool MainWindow::exportPosedLabels(const QString& path) {
     // The label names beside the volume (posed_labels.tsv), written with it or not at all.
     const std::filesystem::path p(path.toStdString());
     AtomicOutputs out(p.has_parent_path() ? p.parent_path().string() : ".");
-    writeImage(pipeline_->posedLabels(), out.stage(p.filename().string()));
+    writeLabelImage(pipeline_->posedLabels(), out.stage(p.filename().string()));
     if (!table_.labels.empty())
       writeTextFile(out.stage(std::filesystem::path(labelTablePathFor(p.filename().string())).string()),
                     labelTableToTsv(table_));

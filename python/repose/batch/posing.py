@@ -56,9 +56,11 @@ def read_image(path, what):
     return image
 
 
-def write_image(image, path):
+def write_image(image, path, labels=False):
+    """Writes an image as `repose` does: label volumes in the smallest integer type holding them."""
     writer = vtkReposeImageWriter()
     writer.SetFileName(path)
+    writer.SetSmallestIntegerType(labels)
     writer.SetInputData(image)
     if not writer.Write():
         raise RuntimeError(writer.GetLastError() or f"{path}: cannot write image")
@@ -254,7 +256,7 @@ class CasePoser:
             write_xml(vtkXMLPolyDataWriter, posed["surfaces"], os.path.join(folder, files[-1]))
         if "labels" in outputs:
             files.append("posed_labels" + (labels_format or self.labels_ext))
-            write_image(posed["labels"], os.path.join(folder, files[-1]))
+            write_image(posed["labels"], os.path.join(folder, files[-1]), labels=True)
             if self.label_table is not None:  # names and colours beside it, as `repose pose` writes them
                 for name, text in (("posed_labels.tsv", self.label_table.GetTsv()),
                                    ("posed_labels.ctbl", self.label_table.GetSlicerColorTable())):
