@@ -1166,14 +1166,24 @@ TEST(SignedSvd, ReconstructsRotationsStretchesInversionsAndDegenerateMatrices) {
   }
 }
 
-TEST(TetUntangling, FreeNodesLeaveTheFoldAndFixedNodesStay) {
-  // A 4x4x4 box with its boundary fixed; two interior nodes pushed through their neighbours.
-  const Box b = makeBox(4, 4, 4, 1.0);
+namespace {
+
+/// fixedBone of a box whose boundary nodes are held (bone 0) and interior free.
+std::vector<int> boundaryFixed(const Box& b) {
   std::vector<int> fixed(std::size_t(b.nodes.rows()), -1);
   for (int k = 0; k < b.nz; ++k)
     for (int j = 0; j < b.ny; ++j)
       for (int i = 0; i < b.nx; ++i)
         if (i == 0 || j == 0 || k == 0 || i == b.nx - 1 || j == b.ny - 1 || k == b.nz - 1) fixed[b.id(i, j, k)] = 0;
+  return fixed;
+}
+
+}  // namespace
+
+TEST(TetUntangling, FreeNodesLeaveTheFoldAndFixedNodesStay) {
+  // A 4x4x4 box with its boundary fixed; two interior nodes pushed through their neighbours.
+  const Box b = makeBox(4, 4, 4, 1.0);
+  const std::vector<int> fixed = boundaryFixed(b);
   Points posed = b.nodes;
   posed.row(b.id(1, 1, 1)) += Eigen::RowVector3d(1.7, 1.4, 1.6);
   posed.row(b.id(3, 2, 2)) += Eigen::RowVector3d(-1.5, 0.3, -1.2);
@@ -1196,6 +1206,37 @@ TEST(TetUntangling, FreeNodesLeaveTheFoldAndFixedNodesStay) {
   EXPECT_EQ(none.invertedBefore, 0);
   EXPECT_EQ(none.nodesMoved, 0);
   EXPECT_EQ((rest - b.nodes).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(TetUntangling, NoTetThatWasPositiveEndsInverted) {
+  // Boxes with their boundary fixed and interior nodes thrown about: the inverted tets after
+  // untangling must be a subset of those before. (Moves that freed two tets by turning a third
+  // passed the count rule and left tets inverted that the input had positive.)
+  const Box b = makeBox(6, 6, 6, 1.0);
+  const std::vector<int> fixed = boundaryFixed(b);
+  auto volumes = [&](const Points& P) {
+    std::vector<double> v(std::size_t(b.tets.rows()));
+    for (Eigen::Index t = 0; t < b.tets.rows(); ++t)
+      v[std::size_t(t)] = repose::tetVolume(P.row(b.tets(t, 0)), P.row(b.tets(t, 1)), P.row(b.tets(t, 2)),
+                                            P.row(b.tets(t, 3)));
+    return v;
+  };
+  int repaired = 0;
+  for (unsigned seed = 0; seed < 40; ++seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, 0.45);
+    Points posed = b.nodes;
+    for (Eigen::Index i = 0; i < posed.rows(); ++i)
+      if (fixed[std::size_t(i)] < 0) posed.row(i) += Eigen::RowVector3d(g(rng), g(rng), g(rng));
+    const std::vector<double> before = volumes(posed);
+    const repose::UntangleReport rep = repose::untangleTets(b.nodes, b.tets, fixed, posed);
+    const std::vector<double> after = volumes(posed);
+    for (std::size_t t = 0; t < after.size(); ++t)
+      EXPECT_FALSE(before[t] > 0.0 && after[t] <= 0.0) << "seed " << seed << ": tet " << t << " turned";
+    EXPECT_LE(rep.invertedAfter, rep.invertedBefore);
+    repaired += rep.invertedBefore - rep.invertedAfter;
+  }
+  EXPECT_GT(repaired, 100);  // the rule still lets untangling do its work
 }
 
 TEST(TetUntangling, TetsWithOnlyFixedNodesAreReportedNotMoved) {

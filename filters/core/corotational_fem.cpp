@@ -86,6 +86,20 @@ int countInverted(const Points& P, const Tets& tets, const std::vector<char>* on
   return count.load();
 }
 
+/// Whether some tet positive in `from` is flat or inverted in `to`.
+bool turnsAPositiveTet(const Points& from, const Points& to, const Tets& tets) {
+  std::atomic<bool> turned{false};
+  parallelFor(std::size_t(tets.rows()), [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e && !turned.load(std::memory_order_relaxed); ++t) {
+      const auto T = tets.row(Eigen::Index(t));
+      if (tetVolume(node(to, T[0]), node(to, T[1]), node(to, T[2]), node(to, T[3])) <= 0.0 &&
+          tetVolume(node(from, T[0]), node(from, T[1]), node(from, T[2]), node(from, T[3])) > 0.0)
+        turned = true;
+    }
+  });
+  return turned.load();
+}
+
 /// Whether a line-search trial can be accepted at all, from the signs of the tet volumes alone (no
 /// per-tet SVD): no more inverted tets than `inverted`, and no tet under the log barrier at det F <= 0,
 /// where its energy is infinite. (The count alone lets a barrier tet flip while penalty tets unfold.)
@@ -189,6 +203,7 @@ class SpdSolver {
     } else if (options_.preconditioner == CorotationalOptions::Cholmod) {
       if (!analyzed_) {
         // METIS nested dissection (as for the harmonic weights); CHOLMOD's defaults without METIS.
+        cholmod_.cholmod().print = 0;  // failures are handled (and reported) here, not printed by CHOLMOD
         cholmod_.cholmod().nmethods = 1;
         cholmod_.cholmod().method[0].ordering = CHOLMOD_METIS;
         cholmod_.analyzePattern(A);
@@ -199,7 +214,15 @@ class SpdSolver {
         }
         analyzed_ = true;
       }
+      cholmod_.setShift(0.0);
       cholmod_.factorize(A);
+      if (cholmod_.info() != Eigen::Success) {
+        // The projected Hessian is only semi-definite: a node whose tets have all been crushed flat
+        // has no stiffness left. A shift of 1e-8 of the mean diagonal (a Levenberg step) restores
+        // definiteness and changes the step by as little.
+        cholmod_.setShift(1e-8 * A.diagonal().cwiseAbs().mean());
+        cholmod_.factorize(A);
+      }
       if (cholmod_.info() != Eigen::Success)
         throw std::runtime_error("relaxCorotational: CHOLMOD factorization failed (matrix not positive definite?)");
       x = cholmod_.solve(b);
@@ -1087,7 +1110,7 @@ void relaxInPlace(const Points& rest, const Tets& tets, const std::vector<int>& 
   if (options.startCorrection.size() > 0) {  // on the unknowns only: fixed nodes and nodes in no tet stay
     Points start = posed;
     for (int v : freeNodes) start.row(v) += options.startCorrection.row(v);
-    if (countInverted(start, tets) <= rep.invertedBefore) {
+    if (!turnsAPositiveTet(posed, start, tets)) {
       posed = start;
       rep.correctedStart = true;
     }

@@ -171,9 +171,10 @@ struct CorotationalOptions {
   /// Optional (#V by 3, or empty): a correction added to posed's free nodes to make the start, e.g.
   /// the last animation frame's relaxed minus skinned positions. Consecutive frames differ little,
   /// so Newton then starts next to the minimum (tiny phantom, walk frame 432: 12 Newton steps
-  /// instead of 35 and a continuation). Taken only if that start has no more inverted tets than
-  /// posed. The result may be another local minimum than from posed alone (the tissue's history):
-  /// frames stay coherent rather than each finding its own minimum.
+  /// instead of 35 and a continuation). Taken only if it inverts no tet that posed has positive:
+  /// FixedCorotated with the barrier never turns a positive tet (nor does untangling), so its result
+  /// then has every tet positive that posed has. The result may be another local minimum than from
+  /// posed alone (the tissue's history): frames stay coherent rather than each finding its own minimum.
   Points startCorrection;
   /// Optional: called with where the solve is before the set-up, each Newton step, each untangling
   /// round, each continuation step and each linear outer iteration (a few seconds apart at most on a

@@ -114,6 +114,7 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
   const double ratio = options.minVolumeRatio;
   std::vector<Vec3> normal;
   std::vector<double> offset;
+  std::vector<char> positiveHere;  // per tet of the node's star: positive before the move
   // Tets below the target ratio (inverted ones and those left nearly flat). A tet can only fall
   // below it when one of its nodes moves, so after the first sweep only the stars of the nodes
   // worked on (and the low tets already known) are looked at again.
@@ -136,6 +137,7 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
       offset.clear();
       int invertedHere = 0;
       double deficitHere = 0.0;
+      positiveHere.clear();
       const Vec3 x0 = node(posed, v);
       // A node is moved within its star (no farther than its farthest neighbour): where the half-spaces
       // contradict each other, their least-squares compromise can lie far outside it (medium phantom,
@@ -150,6 +152,7 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
         const Vec3 g = volumeGradient(posed, tets, t, a);
         const double vol = signedVolume(posed, tets, t);
         if (vol <= 0.0) ++invertedHere;
+        positiveHere.push_back(vol > 0.0);
         deficitHere += std::max(0.0, ratio * restVolume[std::size_t(t)] - vol);
         normal.push_back(g);
         offset.push_back(g.dot(x0) - vol);
@@ -164,12 +167,15 @@ UntangleReport untangleTets(const Points& rest, const Tets& tets, const std::vec
         posed.row(v) = x.transpose();
         int invertedAfter = 0;
         double deficitAfter = 0.0;
+        bool turnedPositive = false;
         for (int k = b; k < e; ++k) {
           const int t = inc[std::size_t(k)] / 4;
           const double vol = signedVolume(posed, tets, t);
           if (vol <= 0.0) ++invertedAfter;
+          turnedPositive = turnedPositive || (vol <= 0.0 && positiveHere[std::size_t(k - b)]);
           deficitAfter += std::max(0.0, ratio * restVolume[std::size_t(t)] - vol);
         }
+        if (turnedPositive) continue;  // never trade a good tet for bad ones (see untangleTets)
         if (invertedAfter < invertedHere || (invertedHere == 0 && invertedAfter == 0 && deficitAfter < 0.999 * deficitHere)) {
           repaired = true;
           break;

@@ -30,8 +30,12 @@ struct UntangleReport {
 /// positions where those tets are positive: each tet's volume is affine in one node, so this is a
 /// small convex problem; when the half-spaces have no common point, the least-squares compromise
 /// between them, which a neighbour's later move may turn feasible; the target is lowered when the
-/// full one is out of reach). A move is kept only if it lowers the number of inverted tets around
-/// the node, or keeps it and lowers their volume deficit, so the total count never grows. Gauss-Seidel sweeps repeat while tets are still inverted and moves still help.
+/// full one is out of reach). A move is kept only if it turns no positive tet and lowers the number
+/// of inverted tets around the node, or keeps it and lowers their volume deficit: the set of inverted
+/// tets only shrinks, so a relaxation never leaves a tet inverted that its input had positive (a
+/// move that freed two tets by turning a third let 4 tets of the Visible Human's hip pose, positive
+/// when skinned, end inverted). Gauss-Seidel sweeps repeat while tets are still inverted and moves
+/// still help.
 ///
 /// rest       #V by 3 rest positions (rest volumes, the scale of minVolumeRatio)
 /// tets       #T by 4, positive at rest
