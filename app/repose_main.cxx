@@ -37,6 +37,7 @@
 #include "interrupt_cleanup.h"
 #include "output_guard.h"
 #include "batch_command.h"
+#include "console_progress.h"
 #include "deformation_stats.h"
 #include "fidelity_plot.h"
 #include "label_table.h"
@@ -773,6 +774,7 @@ int runPose(const Options& o, int argc, char** argv) {
   const std::string outDir = o.require("out");
   repose::refuseOutputsOverInputs(outDir, poseOutputNames(o.all("mesh")), {inputFiles(o, {"pose", "image"}), {caseDir}});
   repose::Pipeline pipeline;
+  pipeline.setProgress(repose::throttledConsoleProgress("pose: "));
   pipeline.loadCase(caseDir);
   pipeline.setPose(repose::readTextFile(posePath), posePath);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
@@ -953,6 +955,7 @@ int runAnimate(const Options& o, int argc, char** argv) {
   const double maxVoxels = parseVoxelCount(o.get("max-voxels", "512M"));
   if (o.has("unit-mm") && !(o.number("unit-mm", 0) > 0)) throw UsageError("--unit-mm needs a positive number of millimetres");
   repose::Pipeline pipeline;
+  pipeline.setProgress(repose::throttledConsoleProgress("animate: "));
   pipeline.loadCase(caseDir);
   pipeline.setMaxPosedVoxels(maxVoxels);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));

@@ -753,6 +753,7 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
       filter->SetInputConnection(0, skinning_->GetOutputPort());
       filter->SetInputData(1, restMesh_);
       filter->SetSkeletonJSON(skeletonJson_.c_str());
+      filter->AddObserver(vtkCommand::ProgressEvent, this, &Pipeline::forwardProgressText);  // where the FEM is
       relaxStrainedRegionThreshold_ = filter->GetStrainedRegionThreshold();
     }
     relax_ = filter;

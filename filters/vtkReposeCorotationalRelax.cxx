@@ -1,5 +1,6 @@
 #include "vtkReposeCorotationalRelax.h"
 
+#include <chrono>
 #include <string>
 
 #include "vtkCellArray.h"
@@ -19,6 +20,7 @@
 #include "ReposeWeightArrays.h"
 #include "body_segments.h"
 #include "corotational_fem.h"
+#include "progress_line.h"
 #include "skeleton.h"
 
 vtkStandardNewMacro(vtkReposeCorotationalRelax);
@@ -164,7 +166,9 @@ int vtkReposeCorotationalRelax::RequestData(
     }
     // Where the solve is, as VTK progress (the fraction is the continuation's path, 0 before it) and
     // text; an observer may call Cancel() from its ProgressEvent.
-    options.checkpoint = [this](const repose::RelaxationProgress& p) {
+    auto pathStart = std::chrono::steady_clock::now();  // the continuation's, for its pace
+    bool onPath = false;
+    options.checkpoint = [this, &pathStart, &onPath](const repose::RelaxationProgress& p) {
       std::string text;
       switch (p.phase)
       {
@@ -184,8 +188,14 @@ int vtkReposeCorotationalRelax::RequestData(
           text = "relaxing the strained region";
           break;
         case repose::RelaxationProgress::Continuation:
-          text = "fold-free continuation, step " + std::to_string(p.continuationSteps + 1) + ", path " +
-            std::to_string(static_cast<int>(100.0 * p.pathFraction)) + " %";
+          if (!onPath)
+          {
+            onPath = true;
+            pathStart = std::chrono::steady_clock::now();
+          }
+          text = "fold-free continuation, step " + std::to_string(p.continuationSteps + 1) + ", " +
+            repose::fractionProgressLine("path", p.pathFraction,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - pathStart).count());
           break;
         case repose::RelaxationProgress::Linear:
           text = "linear solve " + std::to_string(p.outerIteration + 1);

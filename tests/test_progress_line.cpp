@@ -1,4 +1,5 @@
 // The progress line of long runs: durations as a person reads them, the time left from the pace so far.
+#include <cmath>
 #include <gtest/gtest.h>
 
 #include "progress_line.h"
@@ -21,4 +22,14 @@ TEST(ProgressLine, TimeLeftFromThePaceSoFar) {
   EXPECT_EQ(progressLine(0, 75, 3, "frames"), "0 of 75 frames (0 %), 3 s so far");
   EXPECT_EQ(progressLine(75, 75, 150, "frames"), "75 of 75 frames (100 %), 2 min 30 s so far");
   EXPECT_EQ(progressLine(0, 0, 0, "steps"), "0 of 0 steps, 0 s so far");
+}
+
+TEST(ProgressLine, AFractionOfTheWayGivesTheTimeLeftAtItsPace) {
+  // A quarter of the way in 30 s: three quarters left, 90 s.
+  EXPECT_EQ(fractionProgressLine("path", 0.25, 30), "path 25 %, 30 s so far, about 1 min 30 s left at this pace");
+  // Under 1 % the pace says little; at the end nothing is left; out-of-range fractions are clamped.
+  EXPECT_EQ(fractionProgressLine("path", 0.005, 12), "path 0 %, 12 s so far");
+  EXPECT_EQ(fractionProgressLine("path", 1.0, 64), "path 100 %, 1 min 4 s so far");
+  EXPECT_EQ(fractionProgressLine("path", 1.7, 5), "path 100 %, 5 s so far");
+  EXPECT_EQ(fractionProgressLine("path", std::nan(""), 5), "path 0 %, 5 s so far");
 }

@@ -25,6 +25,7 @@ print(text)
 m = re.search(r"(\d+) Newton iterations, (\d+) CG iterations, relative residual (\S+), inverted tets (\d+) -> (\d+)",
               text)
 check(m is not None, "the relaxation reports Newton and CG iterations, residual and inverted tets", failures)
+check(text.startswith("pose: FEM set-up\n"), "pose says where the FEM is, its set-up at once", failures)
 newton, iterations, residual = int(m.group(1)), int(m.group(2)), float(m.group(3))
 before, after = int(m.group(4)), int(m.group(5))
 # Inexact Newton: each step's CG stops at a relative residual of at most 0.1.

@@ -27,4 +27,12 @@ std::string progressLine(std::size_t done, std::size_t total, double secondsSoFa
   return line;
 }
 
+std::string fractionProgressLine(const std::string& what, double fraction, double secondsSoFar) {
+  const double f = std::clamp(std::isfinite(fraction) ? fraction : 0.0, 0.0, 1.0);
+  std::string line = what + " " + std::to_string(int(std::floor(100.0 * f))) + " %, " + durationText(secondsSoFar) +
+                     " so far";
+  if (f >= 0.01 && f < 1.0) line += ", about " + durationText(secondsSoFar * (1.0 - f) / f) + " left at this pace";
+  return line;
+}
+
 }  // namespace repose

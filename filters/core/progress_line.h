@@ -14,4 +14,9 @@ std::string durationText(double seconds);
 /// after secondsSoFar; nothing is said of the time left before the first item or after the last.
 std::string progressLine(std::size_t done, std::size_t total, double secondsSoFar, const std::string& unit);
 
+/// "path 42 %, 25 s so far, about 35 s left at this pace": a stage measured by a fraction (0 to 1)
+/// of its way, such as the FEM's fold-free continuation along its bone paths; the time left only once
+/// 1 % of the way is behind (before that the pace says little) and while the stage is not done.
+std::string fractionProgressLine(const std::string& what, double fraction, double secondsSoFar);
+
 }  // namespace repose
