@@ -179,6 +179,8 @@ void writeTextFile(const std::string& path, const std::string& text) {
 bool fileExists(const std::string& path) { return fs::exists(path); }
 
 std::string imageExtension(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return "/";  // a DICOM series: the derived one is a folder too
   const std::string name = fs::path(path).filename().string();
   for (const char* ext : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd"})
     if (name.size() > std::strlen(ext) && name.compare(name.size() - std::strlen(ext), std::string::npos, ext) == 0)

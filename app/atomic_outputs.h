@@ -49,7 +49,7 @@ std::string readTextFile(const std::string& path);
 /// Writes the text and checks it reached the file whole; throws "PATH: cannot write (REASON)".
 void writeTextFile(const std::string& path, const std::string& text);
 bool fileExists(const std::string& path);
-/// "a/b/labels.nii.gz" -> ".nii.gz"; "" when there is none.
+/// "a/b/labels.nii.gz" -> ".nii.gz"; "" when there is none; "/" for a folder (a DICOM series).
 std::string imageExtension(const std::string& path);
 
 }  // namespace repose

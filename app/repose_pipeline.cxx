@@ -39,6 +39,8 @@
 
 #include "vtkReposeBodyMesher.h"
 #include "vtkReposeCorotationalRelax.h"
+#include "vtkReposeDicomSeriesWriter.h"
+#include "repose_version.h"
 #include "vtkReposeBoneWeights.h"
 #include "vtkReposeImageReader.h"
 #include "vtkReposeImageWriter.h"
@@ -318,7 +320,18 @@ void writeImageAs(vtkImageData* image, const std::string& path, bool smallestInt
 }
 }  // namespace
 
-void writeImage(vtkImageData* image, const std::string& path) { writeImageAs(image, path, false); }
+void writeImage(vtkImageData* image, const std::string& path) {
+  if (!path.empty() && path.back() == '/') {  // a DICOM CT series, as the input was
+    const QuietStderr quiet;
+    auto writer = vtkSmartPointer<vtkReposeDicomSeriesWriter>::New();
+    writer->SetFileName(path.substr(0, path.size() - 1).c_str());
+    writer->SetSeriesDescription("Reposed (Repose " REPOSE_VERSION ")");
+    writer->SetInputData(image);
+    if (!writer->Write()) throw std::runtime_error(writer->GetLastError());
+    return;
+  }
+  writeImageAs(image, path, false);
+}
 
 void writeLabelImage(vtkImageData* labels, const std::string& path) { writeImageAs(labels, path, true); }
 

@@ -10,6 +10,8 @@
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkStringArray.h"
+#include "vtkFieldData.h"
 
 #include "itkImage.h"
 #include "itkImageFileReader.h"
@@ -18,12 +20,14 @@
 #include "itkNiftiImageIOFactory.h"
 #include "itkNrrdImageIOFactory.h"
 
+#include "ReposeDicomSeries.h"
 #include "image_file_integrity.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -225,6 +229,54 @@ vtkSmartPointer<vtkDataArray> ReadWideIntegers(const char* fileName, Header& h)
   return array;
 }
 
+// A DICOM series as vtkImageData: float voxels after rescale, ITK's geometry, the patient and
+// study attributes in the field data.
+vtkSmartPointer<vtkImageData> ReadDicomFolder(const char* folder, const char* seriesUID)
+{
+  const repose::DicomSeriesVolume series = repose::ReadDicomSeries(folder, seriesUID ? seriesUID : "");
+  const auto* image = series.Image.GetPointer();
+  const auto size = image->GetLargestPossibleRegion().GetSize();
+  Header h;
+  h.IsFloat = true;
+  for (int a = 0; a < 3; ++a)
+  {
+    h.Extent[2 * a + 1] = static_cast<int>(size[a]) - 1;
+    h.Origin[a] = image->GetOrigin()[a];
+    h.Spacing[a] = image->GetSpacing()[a];
+    for (int b = 0; b < 3; ++b)
+    {
+      h.Direction[3 * a + b] = image->GetDirection()(a, b);
+    }
+  }
+  CheckGrid(h);
+  const std::size_t n = image->GetLargestPossibleRegion().GetNumberOfPixels();
+  auto values = vtkSmartPointer<vtkFloatArray>::New();
+  values->SetName("ImageScalars");
+  values->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (!std::isfinite(image->GetBufferPointer()[i]))
+    {
+      throw std::runtime_error("voxel " + std::to_string(i) + " is not a finite number");
+    }
+  }
+  std::copy(image->GetBufferPointer(), image->GetBufferPointer() + n, values->GetPointer(0));
+  auto out = vtkSmartPointer<vtkImageData>::New();
+  out->SetExtent(h.Extent);
+  out->SetOrigin(h.Origin);
+  out->SetSpacing(h.Spacing);
+  out->SetDirectionMatrix(h.Direction);
+  out->GetPointData()->SetScalars(values);
+  auto tags = vtkSmartPointer<vtkStringArray>::New();
+  tags->SetName("DicomTags");
+  for (const auto& [key, value] : series.PatientAndStudy)
+  {
+    tags->InsertNextValue(key + "=" + value);
+  }
+  out->GetFieldData()->AddArray(tags);
+  return out;
+}
+
 void ApplyHeader(const Header& h, vtkInformation* outInfo)
 {
   outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), h.Extent, 6);
@@ -244,6 +296,7 @@ vtkReposeImageReader::vtkReposeImageReader()
 vtkReposeImageReader::~vtkReposeImageReader()
 {
   this->SetFileName(nullptr);
+  this->SetSeriesUID(nullptr);
 }
 
 void vtkReposeImageReader::Fail(const std::string& reason)
@@ -285,8 +338,21 @@ int vtkReposeImageReader::RequestInformation(
     return 0;
   }
   RegisterItkFactories();
+  this->DicomVolume = nullptr;
   try
   {
+    if (std::filesystem::is_directory(this->FileName))
+    {
+      // A series' geometry needs every slice's header: read it all once, here.
+      this->DicomVolume = ReadDicomFolder(this->FileName, this->SeriesUID);
+      vtkInformation* outInfo = outputVector->GetInformationObject(0);
+      outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), this->DicomVolume->GetExtent(), 6);
+      outInfo->Set(vtkDataObject::ORIGIN(), this->DicomVolume->GetOrigin(), 3);
+      outInfo->Set(vtkDataObject::SPACING(), this->DicomVolume->GetSpacing(), 3);
+      outInfo->Set(vtkDataObject::DIRECTION(), this->DicomVolume->GetDirectionMatrix()->GetData(), 9);
+      vtkDataObject::SetPointDataActiveScalarInfo(outInfo, VTK_FLOAT, 1);
+      return 1;
+    }
     const Header h = ReadHeader(this->FileName);
     ApplyHeader(h, outputVector->GetInformationObject(0));
   }
@@ -316,6 +382,14 @@ int vtkReposeImageReader::RequestData(
   RegisterItkFactories();
   try
   {
+    if (std::filesystem::is_directory(this->FileName))
+    {
+      vtkSmartPointer<vtkImageData> series = this->DicomVolume;
+      this->DicomVolume = nullptr;
+      output->ShallowCopy(series ? series.GetPointer() : ReadDicomFolder(this->FileName, this->SeriesUID).GetPointer());
+      this->LastError.clear();
+      return 1;
+    }
     Header h;
     const FileKind kind = ProbeFile(this->FileName);
     h.IsFloat = kind.IsFloat;
@@ -348,5 +422,6 @@ void vtkReposeImageReader::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "SeriesUID: " << (this->SeriesUID ? this->SeriesUID : "(none)") << "\n";
   os << indent << "LastError: " << this->LastError << "\n";
 }

@@ -3,6 +3,7 @@
 #include "vtkCellArray.h"
 #include "vtkCellType.h"
 #include "vtkDataArray.h"
+#include "vtkFieldData.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkInformation.h"
@@ -494,6 +495,7 @@ int vtkReposePosedVolume::RequestData(
     output->SetSpacing(spacing);
     output->SetDirectionMatrix(direction);
     output->GetPointData()->SetScalars(outScalars);
+    output->GetFieldData()->PassData(image->GetFieldData()); // e.g. a DICOM input's patient and study
     this->CoveredVoxels = static_cast<vtkIdType>(report.coveredVoxels);
     this->ExtrapolatedVoxels = static_cast<vtkIdType>(report.extrapolatedVoxels);
     this->InvertedTets = static_cast<vtkIdType>(report.invertedTets);

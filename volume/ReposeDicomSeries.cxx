@@ -1,0 +1,243 @@
+#include "ReposeDicomSeries.h"
+
+#include "dicom_slice_stack.h"
+
+#include "gdcmUIDGenerator.h"
+#include "itkGDCMImageIO.h"
+#include "itkGDCMSeriesFileNames.h"
+#include "itkImageFileWriter.h"
+#include "itkImageRegionConstIterator.h"
+#include "itkImageSeriesReader.h"
+#include "itkMetaDataObject.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+namespace repose
+{
+namespace
+{
+namespace fs = std::filesystem;
+using Volume = itk::Image<float, 3>;
+
+// Who the patient is and which study: kept on a series derived from this one.
+const char* const kPatientAndStudyTags[] = { "0010|0010", "0010|0020", "0010|0030", "0010|0040", "0020|000d",
+  "0008|0020", "0008|0030", "0008|0050", "0020|0010", "0008|0090", "0008|1030", "0018|5100", "0020|0052" };
+
+std::string Tag(const itk::MetaDataDictionary& d, const std::string& key)
+{
+  std::string value;
+  itk::ExposeMetaData<std::string>(d, key, value);
+  while (!value.empty() && (value.back() == ' ' || value.back() == '\0'))
+  {
+    value.pop_back();
+  }
+  return value;
+}
+
+std::vector<double> Numbers(const std::string& text)
+{
+  std::vector<double> values;
+  std::string part;
+  std::istringstream in(text);
+  while (std::getline(in, part, '\\'))
+  {
+    try
+    {
+      values.push_back(std::stod(part));
+    }
+    catch (const std::exception&)
+    {
+      return {};
+    }
+  }
+  return values;
+}
+
+std::string Text(double x)
+{
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.6g", x);
+  return buffer;
+}
+
+// The chosen series' file names; a one-line error naming what the folder holds otherwise.
+std::vector<std::string> SeriesFiles(const std::string& folder, const std::string& wanted, std::string& uid)
+{
+  auto names = itk::GDCMSeriesFileNames::New();
+  names->SetUseSeriesDetails(true); // a localizer or a second reconstruction is a series of its own
+  names->SetGlobalWarningDisplay(false);
+  names->SetDirectory(folder);
+  const std::vector<std::string> uids = names->GetSeriesUIDs();
+  if (uids.empty())
+  {
+    throw std::runtime_error("no DICOM series in this folder");
+  }
+  // With series details the identifiers are the Series Instance UID followed by other attributes.
+  std::vector<std::string> matches;
+  for (const std::string& u : uids)
+  {
+    if (wanted.empty() || u == wanted || u.rfind(wanted + ".", 0) == 0)
+    {
+      matches.push_back(u);
+    }
+  }
+  if (matches.size() != 1)
+  {
+    std::string list;
+    for (const std::string& u : uids)
+    {
+      list += (list.empty() ? "" : ", ") + u + " (" + std::to_string(names->GetFileNames(u).size()) + " files)";
+    }
+    throw std::runtime_error(wanted.empty()
+        ? std::to_string(uids.size()) + " DICOM series in this folder, choose one with --series-uid: " + list
+        : "no single DICOM series " + wanted + " in this folder (it holds " + list + ")");
+  }
+  uid = matches.front();
+  return names->GetFileNames(uid);
+}
+
+} // namespace
+
+DicomSeriesVolume ReadDicomSeries(const std::string& folder, const std::string& seriesUID)
+{
+  std::string uid;
+  const std::vector<std::string> files = SeriesFiles(folder, seriesUID, uid);
+  auto io = itk::GDCMImageIO::New();
+  auto reader = itk::ImageSeriesReader<Volume>::New();
+  reader->SetImageIO(io);
+  reader->SetFileNames(files);
+  reader->SetGlobalWarningDisplay(false);
+  reader->Update();
+  DicomSeriesVolume out;
+  out.Image = reader->GetOutput();
+  const auto* dictionaries = reader->GetMetaDataDictionaryArray();
+  if (!dictionaries || dictionaries->size() != files.size())
+  {
+    throw std::runtime_error("DICOM series: per-slice attributes are missing");
+  }
+  std::vector<DicomSlice> slices(files.size());
+  for (std::size_t k = 0; k < files.size(); ++k)
+  {
+    const std::vector<double> p = Numbers(Tag(*(*dictionaries)[k], "0020|0032"));
+    const std::vector<double> o = Numbers(Tag(*(*dictionaries)[k], "0020|0037"));
+    if (p.size() != 3 || o.size() != 6)
+    {
+      throw std::runtime_error(fs::path(files[k]).filename().string() +
+        ": no ImagePositionPatient / ImageOrientationPatient (not a cross-sectional image)");
+    }
+    std::copy(p.begin(), p.end(), slices[k].position.begin());
+    std::copy(o.begin(), o.end(), slices[k].orientation.begin());
+  }
+  const auto spacing = out.Image->GetSpacing();
+  const SliceStackGeometry stack = checkSliceStack(slices, std::min(spacing[0], spacing[1]));
+  if (files.size() > 1)
+  {
+    // ITK's spacing along k from the same positions; its direction's third column is the stacking
+    // direction, which for a grid is the normal (or its opposite).
+    auto s = spacing;
+    s[2] = stack.sliceSpacing;
+    out.Image->SetSpacing(s);
+  }
+  out.SeriesUID = Tag(*(*dictionaries)[0], "0020|000e");
+  for (const char* key : kPatientAndStudyTags)
+  {
+    const std::string value = Tag(*(*dictionaries)[0], key);
+    if (!value.empty())
+    {
+      out.PatientAndStudy.emplace_back(key, value);
+    }
+  }
+  return out;
+}
+
+void WriteDicomSeries(const Volume* image, const std::string& folder, const DicomTags& carried,
+  const std::string& description)
+{
+  if (fs::exists(folder))
+  {
+    throw std::runtime_error("DICOM output folder exists already");
+  }
+  fs::create_directories(folder);
+  try
+  {
+    gdcm::UIDGenerator uids;
+    const std::string seriesUID = uids.Generate();
+    std::string studyUID;
+    itk::MetaDataDictionary base;
+    for (const auto& [key, value] : carried)
+    {
+      itk::EncapsulateMetaData<std::string>(base, key, value);
+      if (key == "0020|000d")
+      {
+        studyUID = value;
+      }
+    }
+    if (studyUID.empty())
+    {
+      itk::EncapsulateMetaData<std::string>(base, "0020|000d", uids.Generate());
+      itk::EncapsulateMetaData<std::string>(base, "0010|0010", "ANONYMOUS");
+      itk::EncapsulateMetaData<std::string>(base, "0010|0020", "ANONYMOUS");
+    }
+    itk::EncapsulateMetaData<std::string>(base, "0020|000e", seriesUID);
+    itk::EncapsulateMetaData<std::string>(base, "0008|0060", "CT");
+    itk::EncapsulateMetaData<std::string>(base, "0008|0008", "DERIVED\\SECONDARY");
+    itk::EncapsulateMetaData<std::string>(base, "0008|103e", description.substr(0, 64));
+    itk::EncapsulateMetaData<std::string>(base, "0020|0011", "1001");
+
+    using Slice = itk::Image<short, 3>;
+    const auto region = image->GetLargestPossibleRegion();
+    const auto size = region.GetSize();
+    const auto direction = image->GetDirection();
+    const auto spacing = image->GetSpacing();
+    for (unsigned k = 0; k < size[2]; ++k)
+    {
+      // One slice as a one-voxel-thick volume: GDCM writes its position, orientation and spacing
+      // from the slice's own geometry.
+      auto slice = Slice::New();
+      Slice::RegionType r;
+      r.SetSize({ { size[0], size[1], 1 } });
+      slice->SetRegions(r);
+      slice->Allocate();
+      itk::Index<3> corner = { { 0, 0, static_cast<itk::IndexValueType>(k) } };
+      itk::Point<double, 3> origin;
+      image->TransformIndexToPhysicalPoint(corner, origin);
+      slice->SetOrigin(origin);
+      slice->SetSpacing(spacing);
+      slice->SetDirection(direction);
+      short* to = slice->GetBufferPointer();
+      const float* from = image->GetBufferPointer() + static_cast<std::size_t>(k) * size[0] * size[1];
+      for (std::size_t i = 0, n = size[0] * size[1]; i < n; ++i)
+      {
+        const float v = std::isfinite(from[i]) ? from[i] : -1024.0f;
+        to[i] = static_cast<short>(std::lround(std::clamp(v, -32768.0f, 32767.0f)));
+      }
+      itk::MetaDataDictionary d = base;
+      itk::EncapsulateMetaData<std::string>(d, "0008|0018", uids.Generate());
+      itk::EncapsulateMetaData<std::string>(d, "0020|0013", std::to_string(k + 1));
+      itk::EncapsulateMetaData<std::string>(d, "0018|0050", Text(spacing[2]));
+      slice->SetMetaDataDictionary(d);
+      auto io = itk::GDCMImageIO::New();
+      io->KeepOriginalUIDOn(); // the UIDs above: one series, one instance per file
+      auto writer = itk::ImageFileWriter<Slice>::New();
+      writer->SetImageIO(io);
+      char name[32];
+      std::snprintf(name, sizeof(name), "IM%05u.dcm", k + 1);
+      writer->SetFileName((fs::path(folder) / name).string());
+      writer->SetInput(slice);
+      writer->Update();
+    }
+  }
+  catch (...)
+  {
+    std::error_code ignored;
+    fs::remove_all(folder, ignored);
+    throw;
+  }
+}
+
+} // namespace repose

@@ -1,0 +1,168 @@
+#include "vtkReposeDicomSeriesWriter.h"
+
+#include "vtkDataArray.h"
+#include "vtkFieldData.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkMatrix3x3.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkStringArray.h"
+
+#include "ReposeDicomSeries.h"
+
+#include <filesystem>
+#include <stdexcept>
+#include <unistd.h>
+
+vtkStandardNewMacro(vtkReposeDicomSeriesWriter);
+
+namespace
+{
+namespace fs = std::filesystem;
+
+// The input as ITK's float volume, same geometry (LPS), voxel values unchanged.
+itk::Image<float, 3>::Pointer ToItk(vtkImageData* input)
+{
+  auto image = itk::Image<float, 3>::New();
+  int dims[3];
+  input->GetDimensions(dims);
+  itk::Image<float, 3>::RegionType region;
+  region.SetSize({ { static_cast<itk::SizeValueType>(dims[0]), static_cast<itk::SizeValueType>(dims[1]),
+    static_cast<itk::SizeValueType>(dims[2]) } });
+  image->SetRegions(region);
+  image->Allocate();
+  // The first voxel's place: VTK's origin is that of index 0, the extent may start elsewhere.
+  int extent[6];
+  input->GetExtent(extent);
+  double first[3];
+  input->TransformIndexToPhysicalPoint(extent[0], extent[2], extent[4], first);
+  image->SetOrigin(first);
+  image->SetSpacing(input->GetSpacing());
+  itk::Image<float, 3>::DirectionType direction;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      direction(r, c) = input->GetDirectionMatrix()->GetElement(r, c);
+    }
+  }
+  image->SetDirection(direction);
+  vtkDataArray* scalars = input->GetPointData()->GetScalars();
+  float* to = image->GetBufferPointer();
+  for (vtkIdType i = 0, n = scalars->GetNumberOfTuples(); i < n; ++i)
+  {
+    to[i] = static_cast<float>(scalars->GetTuple1(i));
+  }
+  return image;
+}
+
+repose::DicomTags CarriedTags(vtkImageData* input)
+{
+  repose::DicomTags tags;
+  auto* array = vtkStringArray::SafeDownCast(input->GetFieldData()->GetAbstractArray("DicomTags"));
+  for (vtkIdType i = 0; array && i < array->GetNumberOfValues(); ++i)
+  {
+    const std::string entry = array->GetValue(i);
+    const auto eq = entry.find('=');
+    if (eq == 9 && entry[4] == '|') // "gggg|eeee=value"
+    {
+      tags.emplace_back(entry.substr(0, eq), entry.substr(eq + 1));
+    }
+  }
+  return tags;
+}
+}
+
+vtkReposeDicomSeriesWriter::vtkReposeDicomSeriesWriter()
+{
+  this->SetNumberOfInputPorts(1);
+  this->SetNumberOfOutputPorts(0);
+}
+
+vtkReposeDicomSeriesWriter::~vtkReposeDicomSeriesWriter()
+{
+  this->SetFileName(nullptr);
+  this->SetSeriesDescription(nullptr);
+}
+
+int vtkReposeDicomSeriesWriter::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  return 1;
+}
+
+int vtkReposeDicomSeriesWriter::FillOutputPortInformation(int, vtkInformation*)
+{
+  return 1;
+}
+
+int vtkReposeDicomSeriesWriter::Write()
+{
+  this->LastError.clear();
+  if (this->GetNumberOfInputConnections(0) < 1)
+  {
+    this->LastError = std::string(this->FileName ? this->FileName : "(no folder name)") + ": cannot write (no input)";
+    vtkErrorMacro(<< this->LastError);
+    return 0;
+  }
+  this->Modified();
+  this->Update();
+  return this->LastError.empty() ? 1 : 0;
+}
+
+int vtkReposeDicomSeriesWriter::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
+{
+  vtkImageData* input = vtkImageData::GetData(inputVector[0]);
+  const std::string target = this->FileName ? this->FileName : "";
+  auto fail = [this, &target](const std::string& reason) {
+    this->LastError =
+      (target.empty() ? std::string("(no folder name)") : target) + ": cannot write (" + reason + ")";
+    vtkErrorMacro(<< this->LastError);
+    return 0;
+  };
+  if (target.empty())
+  {
+    return fail("no folder name set");
+  }
+  if (!input || !input->GetPointData()->GetScalars() || input->GetNumberOfPoints() < 1 ||
+    input->GetPointData()->GetScalars()->GetNumberOfComponents() != 1)
+  {
+    return fail("input has no one-component image scalars");
+  }
+  if (fs::exists(target))
+  {
+    return fail("it exists already");
+  }
+  fs::path finalPath(target);
+  if (finalPath.filename().empty())
+  {
+    finalPath = finalPath.parent_path();
+  }
+  const fs::path temporary =
+    finalPath.parent_path() / ("." + finalPath.filename().string() + ".tmp-" + std::to_string(getpid()));
+  try
+  {
+    std::error_code ignored;
+    fs::remove_all(temporary, ignored);
+    repose::WriteDicomSeries(ToItk(input), temporary.string(), CarriedTags(input),
+      this->SeriesDescription ? this->SeriesDescription : "");
+    fs::rename(temporary, finalPath);
+  }
+  catch (const std::exception& e)
+  {
+    std::error_code ignored;
+    fs::remove_all(temporary, ignored);
+    return fail(e.what());
+  }
+  return 1;
+}
+
+void vtkReposeDicomSeriesWriter::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "SeriesDescription: " << (this->SeriesDescription ? this->SeriesDescription : "(none)") << "\n";
+}
