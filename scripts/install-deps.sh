@@ -5,6 +5,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libvtk9-dev python3-vtk9 vtk9 libvtk9-qt-dev
   libinsighttoolkit5-dev libgdcm-dev  # ITK's image IO; GDCM: DICOM series in and out
+  libdcmtk-dev  # DICOM Segmentation objects (dcmseg)
   libeigen3-dev libjsoncpp-dev
   zlib1g-dev  # gzip CRC and length checked: damaged inputs on read, written .nii.gz outputs read back
   libtet1.5-dev

@@ -177,6 +177,15 @@ void WriteDicomSeries(const Volume* image, const std::string& folder, const Dico
         studyUID = value;
       }
     }
+    bool frameOfReference = false; // one for the whole series: its slices share a patient frame
+    for (const auto& tag : carried)
+    {
+      frameOfReference = frameOfReference || tag.first == "0020|0052";
+    }
+    if (!frameOfReference)
+    {
+      itk::EncapsulateMetaData<std::string>(base, "0020|0052", uids.Generate());
+    }
     if (studyUID.empty())
     {
       itk::EncapsulateMetaData<std::string>(base, "0020|000d", uids.Generate());

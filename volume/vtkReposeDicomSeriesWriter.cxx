@@ -75,41 +75,11 @@ repose::DicomTags CarriedTags(vtkImageData* input)
 }
 }
 
-vtkReposeDicomSeriesWriter::vtkReposeDicomSeriesWriter()
-{
-  this->SetNumberOfInputPorts(1);
-  this->SetNumberOfOutputPorts(0);
-}
+vtkReposeDicomSeriesWriter::vtkReposeDicomSeriesWriter() = default;
 
 vtkReposeDicomSeriesWriter::~vtkReposeDicomSeriesWriter()
 {
-  this->SetFileName(nullptr);
   this->SetSeriesDescription(nullptr);
-}
-
-int vtkReposeDicomSeriesWriter::FillInputPortInformation(int, vtkInformation* info)
-{
-  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
-  return 1;
-}
-
-int vtkReposeDicomSeriesWriter::FillOutputPortInformation(int, vtkInformation*)
-{
-  return 1;
-}
-
-int vtkReposeDicomSeriesWriter::Write()
-{
-  this->LastError.clear();
-  if (this->GetNumberOfInputConnections(0) < 1)
-  {
-    this->LastError = std::string(this->FileName ? this->FileName : "(no folder name)") + ": cannot write (no input)";
-    vtkErrorMacro(<< this->LastError);
-    return 0;
-  }
-  this->Modified();
-  this->Update();
-  return this->LastError.empty() ? 1 : 0;
 }
 
 int vtkReposeDicomSeriesWriter::RequestData(
@@ -117,12 +87,7 @@ int vtkReposeDicomSeriesWriter::RequestData(
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0]);
   const std::string target = this->FileName ? this->FileName : "";
-  auto fail = [this, &target](const std::string& reason) {
-    this->LastError =
-      (target.empty() ? std::string("(no folder name)") : target) + ": cannot write (" + reason + ")";
-    vtkErrorMacro(<< this->LastError);
-    return 0;
-  };
+  auto fail = [this](const std::string& reason) { return this->Fail(reason); };
   if (target.empty())
   {
     return fail("no folder name set");
@@ -163,6 +128,5 @@ int vtkReposeDicomSeriesWriter::RequestData(
 void vtkReposeDicomSeriesWriter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "SeriesDescription: " << (this->SeriesDescription ? this->SeriesDescription : "(none)") << "\n";
 }

@@ -8,42 +8,28 @@
 // written into a temporary sibling folder and renamed into place, so a failed write leaves nothing.
 
 #include "ReposeVolumeModule.h"
-#include "vtkImageAlgorithm.h"
+#include "vtkReposeWriterBase.h"
 
 #include <string>
 
-class REPOSEVOLUME_EXPORT vtkReposeDicomSeriesWriter : public vtkImageAlgorithm
+class REPOSEVOLUME_EXPORT vtkReposeDicomSeriesWriter : public vtkReposeWriterBase
 {
 public:
   static vtkReposeDicomSeriesWriter* New();
-  vtkTypeMacro(vtkReposeDicomSeriesWriter, vtkImageAlgorithm);
+  vtkTypeMacro(vtkReposeDicomSeriesWriter, vtkReposeWriterBase);
   void PrintSelf(ostream& os, vtkIndent indent) override;
-
-  /// The series' folder.
-  vtkSetStringMacro(FileName);
-  vtkGetStringMacro(FileName);
 
   /// DICOM SeriesDescription (at most 64 characters are kept), e.g. how the volume was derived.
   vtkSetStringMacro(SeriesDescription);
   vtkGetStringMacro(SeriesDescription);
 
-  /// Updates the input and writes it. Returns 1 on success, 0 on failure (see GetLastError()).
-  int Write();
-
-  /// One-line description of the last failure ("FOLDER: cannot write (reason)"), empty after success.
-  const char* GetLastError() { return this->LastError.c_str(); }
-
 protected:
   vtkReposeDicomSeriesWriter();
   ~vtkReposeDicomSeriesWriter() override;
 
-  int FillInputPortInformation(int port, vtkInformation* info) override;
-  int FillOutputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  char* FileName = nullptr;
   char* SeriesDescription = nullptr;
-  std::string LastError;
 
 private:
   vtkReposeDicomSeriesWriter(const vtkReposeDicomSeriesWriter&) = delete;

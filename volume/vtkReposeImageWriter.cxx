@@ -220,42 +220,9 @@ void WriteByType(vtkImageData* input, const std::string& fileName, bool compress
 }
 }
 
-vtkReposeImageWriter::vtkReposeImageWriter()
-{
-  this->SetNumberOfInputPorts(1);
-  this->SetNumberOfOutputPorts(0);
-}
+vtkReposeImageWriter::vtkReposeImageWriter() = default;
 
-vtkReposeImageWriter::~vtkReposeImageWriter()
-{
-  this->SetFileName(nullptr);
-}
-
-int vtkReposeImageWriter::FillInputPortInformation(int, vtkInformation* info)
-{
-  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
-  return 1;
-}
-
-int vtkReposeImageWriter::FillOutputPortInformation(int, vtkInformation*)
-{
-  return 1;
-}
-
-int vtkReposeImageWriter::Write()
-{
-  this->LastError.clear();
-  if (this->GetNumberOfInputConnections(0) < 1)
-  {
-    this->LastError = std::string(this->FileName ? this->FileName : "(no file name)") +
-      ": cannot write (no input)";
-    vtkErrorMacro(<< this->LastError);
-    return 0;
-  }
-  this->Modified();
-  this->Update();
-  return this->LastError.empty() ? 1 : 0;
-}
+vtkReposeImageWriter::~vtkReposeImageWriter() = default;
 
 int vtkReposeImageWriter::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
@@ -267,11 +234,7 @@ int vtkReposeImageWriter::RequestData(
 int vtkReposeImageWriter::WriteImage(vtkImageData* given)
 {
   const std::string target = this->FileName ? this->FileName : "";
-  auto fail = [this, &target](const std::string& reason) {
-    this->LastError = (target.empty() ? std::string("(no file name)") : target) + ": cannot write (" + reason + ")";
-    vtkErrorMacro(<< this->LastError);
-    return 0;
-  };
+  auto fail = [this](const std::string& reason) { return this->Fail(reason); };
   if (target.empty())
   {
     return fail("no file name set");
@@ -385,5 +348,5 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
 void vtkReposeImageWriter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "SmallestIntegerType: " << this->SmallestIntegerType << "\n";
 }

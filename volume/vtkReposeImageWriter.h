@@ -7,21 +7,18 @@
 // into place, so a failed or interrupted write never leaves a partial file under the final name.
 
 #include "ReposeVolumeModule.h"
-#include "vtkImageAlgorithm.h"
+#include "vtkReposeWriterBase.h"
 
 #include <string>
 
 class vtkImageData;
 
-class REPOSEVOLUME_EXPORT vtkReposeImageWriter : public vtkImageAlgorithm
+class REPOSEVOLUME_EXPORT vtkReposeImageWriter : public vtkReposeWriterBase
 {
 public:
   static vtkReposeImageWriter* New();
-  vtkTypeMacro(vtkReposeImageWriter, vtkImageAlgorithm);
+  vtkTypeMacro(vtkReposeImageWriter, vtkReposeWriterBase);
   void PrintSelf(ostream& os, vtkIndent indent) override;
-
-  vtkSetStringMacro(FileName);
-  vtkGetStringMacro(FileName);
 
   /// Integer images (label volumes) are written in the smallest integer type that holds their
   /// values: unsigned char up to 255, unsigned short up to 65535, short for small negative values,
@@ -32,24 +29,14 @@ public:
   vtkGetMacro(SmallestIntegerType, bool);
   vtkBooleanMacro(SmallestIntegerType, bool);
 
-  /// Updates the input and writes it. Returns 1 on success, 0 on failure (see GetLastError()).
-  int Write();
-
-  /// One-line description of the last failure ("FILE: cannot write (reason)"), empty after success.
-  const char* GetLastError() { return this->LastError.c_str(); }
-
 protected:
   vtkReposeImageWriter();
   ~vtkReposeImageWriter() override;
 
-  int FillInputPortInformation(int port, vtkInformation* info) override;
-  int FillOutputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int WriteImage(vtkImageData* image);
 
-  char* FileName = nullptr;
   bool SmallestIntegerType = false;
-  std::string LastError;
 
 private:
   vtkReposeImageWriter(const vtkReposeImageWriter&) = delete;

@@ -5,7 +5,8 @@ reads the one chosen; a missing slice is refused as such; a series derived from 
 patient and study with a new series UID; `prepare --image FOLDER` takes the series beside a NIfTI
 label volume on the same grid, and `pose --image FOLDER` writes the posed CT as a derived DICOM series
 (posed_image/: the input's study, a new series, DERIVED image type, a description saying how it was
-made) with the same voxels as from the NIfTI CT."""
+made) with the same voxels as from the NIfTI CT. The posed labels written as a DICOM Segmentation (one
+segment per label, named) on that CT read back onto its grid voxel for voxel."""
 import os
 import shutil
 import sys
@@ -14,7 +15,7 @@ import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonMath import vtkMatrix3x3
 
-from repose import vtkReposeDicomSeriesWriter, vtkReposeImageReader
+from repose import vtkReposeDicomSegReader, vtkReposeDicomSegWriter, vtkReposeDicomSeriesWriter, vtkReposeImageReader
 from repose_testing import SHARED, TEMP, Image, check, run
 
 failures = []
@@ -161,6 +162,34 @@ check(description.startswith("Reposed (Repose ") and image_type.startswith("DERI
       tags(posed).get("0020|000d") == first_tags["0020|000d"] and
       series_uid(f"{work}/posed_dicom/posed_image/{posed_files[0]}") != series_uid(f"{work}/ct/{files[0]}"),
       f"the posed series: '{description}', {image_type}, the input's study, a new series UID", failures)
+
+# The posed labels as a DICOM Segmentation on the posed CT (its patient, study and frame of reference),
+# one segment per label with its name: read back onto the CT's grid, every voxel's label is the same.
+posed_labels, _ = read(f"{work}/posed_nifti/posed_labels.nii.gz")
+posed_labels.GetFieldData().ShallowCopy(posed.GetFieldData())
+table = [line.split("\t") for line in open(f"{work}/posed_nifti/posed_labels.tsv").read().splitlines()[1:]]
+seg_writer = vtkReposeDicomSegWriter()
+seg_writer.SetInputData(posed_labels)
+seg_writer.SetFileName(f"{work}/posed_labels.dcm")
+seg_reader = vtkReposeDicomSegReader()
+for value, name, kind in table:
+    seg_writer.AddSegment(int(value), name, 0.9, 0.8, 0.7, kind == "bone")
+    seg_reader.AddSegment(int(value), name)
+ok = seg_writer.Write()
+seg_reader.SetInputData(posed)
+seg_reader.SetFileName(f"{work}/posed_labels.dcm")
+seg_reader.Update()
+names_array = seg_reader.GetOutput().GetFieldData().GetAbstractArray("SegmentNames")
+names = [names_array.GetValue(i) for i in range(names_array.GetNumberOfValues())] if names_array else []
+expected = vtk_to_numpy(posed_labels.GetPointData().GetScalars())
+got = vtk_to_numpy(seg_reader.GetOutput().GetPointData().GetScalars()) if not seg_reader.GetLastError() else None
+present = sorted(set(expected.tolist()) - {0})
+check(ok and got is not None and np.array_equal(expected, got) and len(names) == len(present),
+      f"posed labels as a DICOM SEG: {len(names)} segments ({', '.join(names[:3])}, ...), read back voxel for voxel "
+      f"({seg_writer.GetLastError()}{seg_reader.GetLastError()})", failures)
+data = open(f"{work}/posed_labels.dcm", "rb").read()
+check(first_tags["0020|000d"].encode() in data and b"1.2.840.10008.5.1.4.1.1.66.4" in data,
+      "the SEG is a Segmentation Storage object in the CT's study", failures)
 
 print(f"{len(failures)} failed")
 sys.exit(1 if failures else 0)
