@@ -12,6 +12,8 @@
 
 #include "ReposeDicomSeries.h"
 
+#include "gdcmUIDGenerator.h"
+
 #include <filesystem>
 #include <stdexcept>
 #include <unistd.h>
@@ -76,6 +78,22 @@ repose::DicomTags CarriedTags(vtkImageData* input)
 }
 
 vtkReposeDicomSeriesWriter::vtkReposeDicomSeriesWriter() = default;
+
+void vtkReposeDicomSeriesWriter::AssignNewStudy(vtkImageData* image)
+{
+  if (!image || image->GetFieldData()->GetAbstractArray("DicomTags"))
+  {
+    return;
+  }
+  gdcm::UIDGenerator uids;
+  auto tags = vtkSmartPointer<vtkStringArray>::New();
+  tags->SetName("DicomTags");
+  tags->InsertNextValue("0010|0010=ANONYMOUS");
+  tags->InsertNextValue("0010|0020=ANONYMOUS");
+  tags->InsertNextValue(std::string("0020|000d=") + uids.Generate());
+  tags->InsertNextValue(std::string("0020|0052=") + uids.Generate());
+  image->GetFieldData()->AddArray(tags);
+}
 
 vtkReposeDicomSeriesWriter::~vtkReposeDicomSeriesWriter()
 {

@@ -12,6 +12,8 @@
 
 #include <string>
 
+class vtkImageData;
+
 class REPOSEVOLUME_EXPORT vtkReposeDicomSeriesWriter : public vtkReposeWriterBase
 {
 public:
@@ -22,6 +24,11 @@ public:
   /// DICOM SeriesDescription (at most 64 characters are kept), e.g. how the volume was derived.
   vtkSetStringMacro(SeriesDescription);
   vtkGetStringMacro(SeriesDescription);
+
+  /// Gives an image that has none (no "DicomTags" in its field data) a new study, frame of reference
+  /// and an anonymous patient, so that the series and segmentations written from it and from images
+  /// given the same tags belong together. An image that has them is left as it is.
+  static void AssignNewStudy(vtkImageData* image);
 
 protected:
   vtkReposeDicomSeriesWriter();

@@ -285,6 +285,10 @@ void MainWindow::buildMenus() {
                                                    "Images (*.nii *.nii.gz *.nrrd *.nhdr *.mha *.mhd)");
     if (!p.isEmpty()) loadRestImage(p);
   });
+  loadCtSeries_ = add(file, "Load CT from a &DICOM series…", QKeySequence(), [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, "DICOM CT series on the label grid");
+    if (!dir.isEmpty()) loadRestImage(dir);
+  });
   file->addSeparator();
   loadPose_ = add(file, "&Load pose…", QKeySequence("Ctrl+L"), [this] {
     const QString p = QFileDialog::getOpenFileName(this, "Load pose", QString(), "Pose (*.json)");
@@ -437,7 +441,7 @@ void MainWindow::updateActions() {
   const bool ready = hasCase() && !isRelaxing();
   undo_->setEnabled(ready && controller_.canUndo());
   redo_->setEnabled(ready && controller_.canRedo());
-  for (QAction* a : {savePose_, loadPose_, closeCase_, loadCt_}) a->setEnabled(ready);
+  for (QAction* a : {savePose_, loadPose_, closeCase_, loadCt_, loadCtSeries_}) a->setEnabled(ready);
   for (QAction* a : export_) a->setEnabled(ready);
   export_[1]->setEnabled(ready && restImage_);  // no save dialog for a CT the case does not have
   export_[4]->setEnabled(ready && animation_->hasClip());

@@ -213,7 +213,7 @@ private:
   QSlider* skinOpacity_;
   QLabel* frameLabel_;
   QLabel* sliceLabel_;
-  QAction *undo_, *redo_, *savePose_, *loadPose_, *export_[6], *closeCase_, *loadCt_;
+  QAction *undo_, *redo_, *savePose_, *loadPose_, *export_[6], *closeCase_, *loadCt_, *loadCtSeries_;
   vtkSmartPointer<vtkPolyData> beforeSurfaces_;
 };
 

@@ -33,6 +33,17 @@ OpenScanDialog::OpenScanDialog(QWidget* parent) : QDialog(parent) {
   };
   row("Label volume (segmentation):", labels_, false, kImages);
   row("CT on the same grid (optional):", image_, false, kImages);
+  {
+    // A CT often comes as a DICOM series: a folder of slices, read as one volume.
+    auto* series = new QPushButton("DICOM series folder…", this);
+    series->setToolTip("Choose a folder holding one DICOM CT series (oblique series are read with their "
+                       "direction; gantry-tilted ones are refused)");
+    form->addRow("", series);
+    connect(series, &QPushButton::clicked, this, [this] {
+      const QString dir = QFileDialog::getExistingDirectory(this, "Choose the DICOM series folder");
+      if (!dir.isEmpty()) image_->setText(dir);
+    });
+  }
   row("Label table .tsv (optional):", table_, false, "Label tables (*.tsv *.txt);;All files (*)");
   auto_ = new QCheckBox("Find the skeleton automatically from the bone labels", this);
   form->addRow("", auto_);

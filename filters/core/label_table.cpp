@@ -228,6 +228,10 @@ std::array<std::uint8_t, 4> generatedColour(const LabelInfo& l) {
 
 }  // namespace
 
+std::array<std::uint8_t, 4> displayColour(const LabelInfo& label) {
+  return label.hasColor ? label.rgba : generatedColour(label);
+}
+
 std::string labelTableToSlicerColorTable(const LabelTable& table) {
   std::ostringstream out;
   const auto values = std::count_if(table.labels.begin(), table.labels.end(), [](const LabelInfo& l) { return l.value != 0; });
@@ -237,7 +241,7 @@ std::string labelTableToSlicerColorTable(const LabelTable& table) {
     if (l.value == 0) continue;
     std::string name = l.name;
     std::replace(name.begin(), name.end(), ' ', '_');
-    const auto rgba = l.hasColor ? l.rgba : generatedColour(l);
+    const auto rgba = displayColour(l);
     out << l.value << ' ' << name;
     for (std::uint8_t c : rgba) out << ' ' << int(c);
     out << '\n';

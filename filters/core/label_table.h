@@ -60,6 +60,10 @@ std::string labelTableToTsv(const LabelTable& table);
 /// bone colour, the others hues spread by the golden angle (the same value, the same colour).
 std::string labelTableToSlicerColorTable(const LabelTable& table);
 
+/// The colour a label is shown in (0..255 RGBA): its own, else the one the Slicer colour table gives
+/// it (bones Slicer's bone colour, other labels a hue by the golden angle of their value).
+std::array<std::uint8_t, 4> displayColour(const LabelInfo& label);
+
 /// The label tables stored beside a label volume, most specific first: for DIR/NAME.nii.gz (or
 /// .nii, .nrrd, .nhdr, .mha, .mhd) those of DIR/NAME.tsv, DIR/NAME.ctbl, DIR/NAME_ColorTable.ctbl
 /// (3D Slicer's export), DIR/NAME.txt and DIR/labels.tsv that exist.
