@@ -65,8 +65,8 @@ for name, args, sig, has_outputs in runs:
     p.send_signal(sig)
     err = p.communicate(timeout=60)[1].strip()
     check(p.returncode == 128 + sig, f"{what}: exit {128 + sig} (got {p.returncode})", failures)
-    check(len(err.splitlines()) == 1 and err.startswith("repose: error: ") and f"interrupted by {sig.name}" in err,
-          f"{what}: one line ({err!r})", failures)
+    check(len(err.splitlines()) == 1 and err.startswith(f"repose: error: {out}: interrupted by {sig.name}"),
+          f"{what}: one line naming {out} ({err!r})", failures)
     check(not os.path.exists(out), f"{what}: no output folder left", failures)
     shutil.rmtree(f"{work}/out", ignore_errors=True)
 
