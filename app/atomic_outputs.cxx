@@ -1,5 +1,6 @@
 #include "atomic_outputs.h"
 
+#include "temporary_lock.h"
 #include "written_file.h"
 
 #include <cerrno>
@@ -68,29 +69,13 @@ pid_t pidOf(const std::string& name) {
   return static_cast<pid_t>(std::stol(name.substr(i, end - i)));
 }
 
-bool processAlive(pid_t pid) { return ::kill(pid, 0) == 0 || errno == EPERM; }
-
-/// True when no process holds the folder's lock (a live run in another pid namespace or on another
-/// host of a network file system does).
-bool lockIsFree(const fs::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return true;  // not a folder: a temporary file of the image writer
-  const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
-  ::close(fd);
-  return free;
-}
-
 }  // namespace
 
 AtomicOutputs::AtomicOutputs(const std::string& finalDir) : finalDir_(finalDir), createdRoot_(firstMissing(finalDir)) {
   makeDirectories(finalDir_);
   removeStaleTemporaryFolders(finalDir_);
   tempDir_ = (fs::path(finalDir_) / (kTempPrefix + std::to_string(::getpid()))).string();
-  std::error_code ec;
-  fs::remove_all(tempDir_, ec);
-  makeDirectories(tempDir_);
-  lockFd_ = ::open(tempDir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (lockFd_ >= 0) ::flock(lockFd_, LOCK_EX | LOCK_NB);
+  lock_ = std::make_unique<TemporaryLock>(tempDir_, true);
   std::lock_guard<std::mutex> lock(registryMutex());
   registry()[tempDir_] = {finalDir_, createdRoot_};
 }
@@ -100,7 +85,7 @@ AtomicOutputs::~AtomicOutputs() {
   registry().erase(tempDir_);
   std::error_code ec;
   fs::remove_all(tempDir_, ec);
-  if (lockFd_ >= 0) ::close(lockFd_);
+  lock_.reset();
   if (!committed_) removeEmptyUpTo(fs::absolute(finalDir_).lexically_normal(), createdRoot_);
 }
 
@@ -140,9 +125,7 @@ int removeStaleTemporaryFolders(const std::string& dir) {
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const pid_t pid = pidOf(entry.path().filename().string());
-    if (pid <= 0 || pid == ::getpid() || processAlive(pid) || !lockIsFree(entry.path())) continue;
-    std::error_code rec;
-    removed += fs::remove_all(entry.path(), rec) > 0 ? 1 : 0;
+    if (pid > 0 && pid != ::getpid() && removeIfUnlocked(entry.path().string())) ++removed;
   }
   return removed;
 }

@@ -2,8 +2,10 @@
 // A command's outputs are first written into a hidden temporary folder inside their final folder
 // and moved into place only when all of them are complete, so a failed run leaves no partial output.
 // The temporary folder is named .repose-tmp-<pid> and locked (flock) while its process lives: a
-// later run in the same folder removes the folders of dead processes, and an interrupted run's
-// signal handler removes its own (removeTemporaryFolders).
+// later run in the same folder removes the folders whose lock is free (their process is dead, whatever
+// process has its pid now), and an interrupted run's signal handler removes its own
+// (removeTemporaryFolders).
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,13 +33,14 @@ private:
   std::string finalDir_, tempDir_;
   std::string createdRoot_;  // the outermost folder this run created ("" when finalDir existed)
   bool committed_ = false;
-  int lockFd_ = -1;
+  std::unique_ptr<class TemporaryLock> lock_;  // held while this run writes
 };
 
 /// Removes the temporary folders of every AtomicOutputs alive in this process; safe to call from a
 /// thread other than the writers' (a signal-handling thread). Returns their final folders.
 std::vector<std::string> removeTemporaryFolders();
-/// Removes the .repose-tmp-<pid>* entries of `dir` whose process is dead (and whose lock is free).
+/// Removes the .repose-tmp-<pid>* entries of `dir` of other processes whose lock is free (their
+/// writer is dead); returns how many.
 int removeStaleTemporaryFolders(const std::string& dir);
 /// A message with the temporary folders taken out of its paths, so it names the final files.
 std::string withFinalPaths(std::string message);

@@ -5,6 +5,8 @@
 #include <cerrno>
 #include <csignal>
 #include <fcntl.h>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <unistd.h>
@@ -15,6 +17,24 @@ namespace repose {
 namespace {
 
 int signalPipe[2] = {-1, -1};
+std::string outPath;  // the command's --out, named when no output folder exists yet
+
+/// The value of --out (or --out=VALUE) on this process's command line, "" without one. Read from
+/// /proc so that every command is covered without passing its arguments here.
+std::string outOption() {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string previous, found;
+  for (std::size_t begin = 0, end; begin < all.size(); begin = end + 1) {
+    end = all.find('\0', begin);
+    if (end == std::string::npos) end = all.size();
+    const std::string arg = all.substr(begin, end - begin);
+    if (previous == "--out") found = arg;
+    if (arg.rfind("--out=", 0) == 0) found = arg.substr(6);
+    previous = arg;
+  }
+  return found;
+}
 
 void onSignal(int s) {
   const int saved = errno;
@@ -27,9 +47,10 @@ const char* signalName(int s) { return s == SIGINT ? "SIGINT" : s == SIGTERM ? "
 
 [[noreturn]] void cleanUpAndExit(int s, int err) {
   const std::vector<std::string> dirs = removeTemporaryFolders();
-  const std::string line = "repose: error: " + (dirs.empty() ? std::string() : dirs.front() + ": ") +
-                           "interrupted by " + signalName(s) +
-                           (dirs.empty() ? std::string() : "; nothing written (temporary folder removed)") + "\n";
+  const std::string named = !dirs.empty() ? dirs.front() : outPath;
+  const std::string line = "repose: error: " + (named.empty() ? std::string() : named + ": ") + "interrupted by " +
+                           signalName(s) +
+                           (dirs.empty() ? "; nothing written yet" : "; nothing written (temporary folder removed)") + "\n";
   (void)!::write(err, line.data(), line.size());
   ::_exit(128 + s);
 }
@@ -37,6 +58,7 @@ const char* signalName(int s) { return s == SIGINT ? "SIGINT" : s == SIGTERM ? "
 }  // namespace
 
 void cleanUpOnInterrupt() {
+  outPath = outOption();
   if (::pipe2(signalPipe, O_CLOEXEC) != 0) return;
   // stderr as it is now: a writer may silence fd 2 for a while (QuietStderr).
   const int err = ::fcntl(STDERR_FILENO, F_DUPFD_CLOEXEC, 0);

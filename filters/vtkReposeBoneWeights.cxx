@@ -53,9 +53,9 @@ repose::TetMesh ToTetMesh(vtkUnstructuredGrid* grid)
       mesh.tets(c, k) = static_cast<int>(ids[k]);
   }
   vtkDataArray* fixed = grid->GetPointData()->GetArray("FixedBone");
-  if (!fixed || fixed->GetNumberOfComponents() != 1)
+  if (!fixed || fixed->GetNumberOfComponents() != 1 || fixed->GetNumberOfTuples() != np)
     throw std::invalid_argument(
-      "input has no 1-component point data \"FixedBone\" (bone index per node, -1 for free nodes)");
+      "input has no 1-component point data \"FixedBone\" with a value per node (bone index, -1 for free nodes)");
   mesh.fixedBone.resize(np);
   for (vtkIdType i = 0; i < np; ++i)
   {

@@ -78,6 +78,12 @@ int vtkReposeSurfaceDeformer::RequestData(
         "input surface has no BoundTet/BoundWeights point data; bind it with vtkReposeSurfaceBinding first");
     }
     const vtkIdType n = surface->GetNumberOfPoints();
+    if (tetArray->GetNumberOfTuples() != n || weights->GetNumberOfTuples() != n)
+    {
+      throw std::invalid_argument("BoundTet/BoundWeights hold " + std::to_string(tetArray->GetNumberOfTuples()) + "/" +
+        std::to_string(weights->GetNumberOfTuples()) + " values for " + std::to_string(n) +
+        " surface points; bind the surface again");
+    }
     const vtkMTimeType cellsTime = mesh->GetCells() ? mesh->GetCells()->GetMTime() : 0;
     if (in.Surface != surface || in.SurfaceTime != surface->GetMTime() || in.Mesh != mesh ||
       in.CellsTime != cellsTime)

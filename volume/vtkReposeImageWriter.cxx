@@ -18,11 +18,13 @@
 #include "itkNiftiImageIOFactory.h"
 #include "itkNrrdImageIOFactory.h"
 
+#include "temporary_lock.h"
 #include "written_file.h"
 
 #include <algorithm>
 #include <cerrno>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -268,20 +270,25 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
   const std::string base = finalPath.filename().string();
   const std::string tag = ".repose-tmp-" + std::to_string(::getpid()) + "-";
   std::error_code ec;
-  // Single files get a temporary name with the same extension; header+data pairs are written into a
-  // temporary folder (relative data-file references stay valid) and both files are moved out.
+  // Written into a temporary folder under the final name (a header+data pair's relative data-file
+  // reference stays valid), locked while this process writes it, then moved out.
   const fs::path tmpDir = dir / (tag + base + ".d");
-  const fs::path tmpFile = pair ? tmpDir / base : dir / (tag + base);
+  const fs::path tmpFile = tmpDir / base;
   if (!fs::is_directory(dir, ec))
   {
     return fail("directory " + dir.string() + " does not exist");
   }
+  std::unique_ptr<repose::TemporaryLock> lock;  // held until the folder is gone, removed on failure too
   try
   {
-    if (pair)
-    {
-      fs::create_directory(tmpDir);
-    }
+    lock = std::make_unique<repose::TemporaryLock>(tmpDir.string(), true);
+  }
+  catch (const std::exception& e)
+  {
+    return fail(e.what());  // not ours to remove: another process writes it
+  }
+  try
+  {
     errno = 0;
     if (vti)
     {
@@ -311,22 +318,15 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
     {
       repose::throwWriteFailure(target, tmpFile.string());
     }
-    if (pair)
+    for (const auto& entry : fs::directory_iterator(tmpDir))
     {
-      for (const auto& entry : fs::directory_iterator(tmpDir))
-      {
-        fs::rename(entry.path(), dir / entry.path().filename());
-      }
-      fs::remove(tmpDir);
+      fs::rename(entry.path(), dir / entry.path().filename());
     }
-    else
-    {
-      fs::rename(tmpFile, finalPath);
-    }
+    fs::remove(tmpDir);
   }
   catch (const repose::WriteFailure& e)
   {
-    pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
+    fs::remove_all(tmpDir, ec);
     return fail(e.reason);
   }
   catch (const itk::ExceptionObject& e)
@@ -334,12 +334,12 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
     // ITK's description runs over lines and names the temporary file: the cause, when known, says more.
     const int err = errno;
     const std::string known = repose::knownWriteFailure(tmpFile.string(), repose::isStorageError(err) ? err : 0);
-    pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
+    fs::remove_all(tmpDir, ec);
     return fail(known.empty() ? e.GetDescription() : known);
   }
   catch (const std::exception& e)
   {
-    pair ? fs::remove_all(tmpDir, ec) : fs::remove(tmpFile, ec);
+    fs::remove_all(tmpDir, ec);
     return fail(e.what());
   }
   return 1;

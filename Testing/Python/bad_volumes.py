@@ -1,6 +1,7 @@
 """Damaged and hostile label volumes: each refused on read with one line naming the file, before any
 allocation sized by the damage, with no output left and the input unchanged. The bad files are made
 from the tiny phantom by editing bytes (NIfTI header fields, gzip streams, NRRD and MetaImage data)."""
+import bz2
 import gzip
 import os
 import shutil
@@ -80,6 +81,26 @@ def compressed_mha(data):
     return mha_text.format(f"CompressedData = True\nCompressedDataSize = {len(data)}").encode() + data
 
 
+def nifti_pair(name, data):
+    """A two-file NIfTI: NAME.hdr (magic ni1, voxels from byte 0 of the .img) and NAME.img; the .hdr's path."""
+    h = bytearray(header[:348])
+    struct.pack_into("<f", h, 108, 0.0)
+    h[344:348] = b"ni1\0"
+    if data is not None:
+        put(f"{name}.img", data)
+    return put(f"{name}.hdr", bytes(h))
+
+
+def detached_nrrd(name, encoding, data, data_name):
+    put(data_name, data)
+    return put(name, (nrrd_text.format(encoding).rstrip("\n") + f"\ndata file: {data_name}\n").encode())
+
+
+ascii_voxels = "\n".join(map(str, labels)).encode() + b"\n"
+ascii_cut = b"\n".join(ascii_voxels.split()[:len(labels) * 97 // 100]) + b"\n"
+hex_voxels = "\n".join(voxels[i:i + 32].hex() for i in range(0, len(voxels), 32)).encode() + b"\n"
+
+
 bad = {
     # integrity: cut, corrupted, or promising more than it holds
     "cut at 97 % (gzip)": put("cut97.nii.gz", gz[:len(gz) * 97 // 100], False),
@@ -107,6 +128,14 @@ bad = {
                                             gzip.compress(voxels[:cut], mtime=0)),
     "MetaImage cut short": put("cut.mha", mha_text.format("CompressedData = False").encode() + voxels[:cut]),
     "MetaImage zlib data damaged": put("zlib.mha", compressed_mha(zlib.compress(voxels)[:-9] + b"\0" * 9)),
+    "two-file NIfTI, .img cut at 97 %": nifti_pair("pair_cut", voxels[:cut]),
+    "two-file NIfTI named by its .img, cut": nifti_pair("pair_img_cut", voxels[:cut])[:-4] + ".img",
+    "two-file NIfTI without its .img": nifti_pair("pair_lost", None),
+    "NRRD ascii data cut short": put("cut_ascii.nrrd", nrrd_text.format("ascii").encode() + ascii_cut),
+    "NRRD hex data cut short": put("cut_hex.nrrd", nrrd_text.format("hex").encode() + hex_voxels[:len(hex_voxels) * 97 // 100]),
+    "NRRD bzip2 data (not readable)": put("bzip2.nrrd", nrrd_text.format("bzip2").encode() + bz2.compress(voxels)),
+    "detached NRRD, .raw cut short": detached_nrrd("cut_raw.nhdr", "raw", voxels[:cut], "cut_raw.raw"),
+    "detached NRRD, ascii data cut short": detached_nrrd("cut_ascii.nhdr", "ascii", ascii_cut, "cut_ascii.txt"),
     # grids no scanner makes
     "NaN spacing": put("nan_spacing.nii.gz", edited("f", 80, float("nan"))),
     "spacing 1e30 mm": put("vast_spacing.nii.gz", edited("fff", 80, 1e30, 1e30, 1e30)),
@@ -146,6 +175,11 @@ gone = put("bone_gone.nii.gz", edited("h", 70, 8, data=one_bone.tobytes()))
 good = {put("good.nii", nifti): labels, put("good.nrrd", nrrd_text.format("raw").encode() + voxels): labels,
         put("good_gz.nrrd", nrrd_text.format("gzip").encode() + gzip.compress(voxels, mtime=0)): labels,
         put("good.mha", compressed_mha(zlib.compress(voxels))): labels,
+        nifti_pair("good_pair", voxels): labels, nifti_pair("good_pair_img", voxels)[:-4] + ".img": labels,
+        put("good_ascii.nrrd", nrrd_text.format("ascii").encode() + ascii_voxels): labels,
+        put("good_hex.nrrd", nrrd_text.format("hex").encode() + hex_voxels): labels,
+        detached_nrrd("good_raw.nhdr", "raw", voxels, "good_raw.raw"): labels,
+        detached_nrrd("good_ascii.nhdr", "ascii", ascii_voxels, "good_ascii.txt"): labels,
         put("good_float.nii.gz", with_datatype(16, 32, labels.astype(np.float32))): labels,
         put("good_wide.nii.gz", with_datatype(768, 32, labels.astype(np.uint32))): labels,
         put("good_extension.nii.gz", extended): labels, put("good_members.nii.gz", members, False): labels,
@@ -154,9 +188,16 @@ for path, expected in good.items():
     check(np.array_equal(Image(path).a.ravel(), expected), f"undamaged {os.path.basename(path)} is read", failures)
 
 before = file_digests(f"{work}/in")
+# What the refusals of damaged data files must say (not the image library's own words).
+reasons = {"two-file NIfTI, .img cut at 97 %": "data file ", "two-file NIfTI named by its .img, cut": "holds",
+           "two-file NIfTI without its .img": "pair_lost.img is missing", "NRRD ascii data cut short": "values",
+           "NRRD hex data cut short": "hex digits", "NRRD bzip2 data (not readable)": "save it raw or gzip",
+           "detached NRRD, .raw cut short": "data file ", "detached NRRD, ascii data cut short": "cut_ascii.txt: "}
 for i, (what, path) in enumerate(bad.items()):
-    expect_refusal(what, ["prepare", "--labels", path, "--skeleton", skeleton], os.path.basename(path),
-                   f"{work}/out{i}", failures)
+    line = expect_refusal(what, ["prepare", "--labels", path, "--skeleton", skeleton], os.path.basename(path),
+                          f"{work}/out{i}", failures)
+    if what in reasons:
+        check(reasons[what] in line, f"{what}: the reason says {reasons[what]!r}", failures)
 line = expect_refusal("bone removed by damage", ["prepare", "--labels", gone, "--skeleton", skeleton],
                       "bone_gone.nii.gz", f"{work}/out_gone", failures)
 check(line.startswith(f"repose: error: {gone}") and "absent" in line, "the volume is blamed first", failures)
@@ -166,5 +207,5 @@ expect_refusal("damaged voxelize reference", ["voxelize", "--skin", f"{TINY}/cas
                "cut97.nii.gz", f"{work}/voxelized.nii.gz", failures)
 check(file_digests(f"{work}/in") == before, "inputs unchanged", failures)
 print(f"bad volumes tried: {len(bad) + 2}")
-print(f"{len(bad) + len(good) + 4 - len(failures)} passed, {len(failures)} failed")
+print(f"{len(bad) + len(good) + len(reasons) + 4 - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)

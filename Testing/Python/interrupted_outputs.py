@@ -2,8 +2,10 @@
 its temporary folder open) and prepare (while meshing) exit 130 or 143 with one line, and remove the
 temporary folder and the output folder they created; inputs stay byte-identical. A run killed with
 SIGKILL cannot clean up: the next run into the same folder removes its stale .repose-tmp-<pid>
-folder, but keeps those of live processes and those locked by a live process (a run in another pid
-namespace or on another host of a network file system)."""
+folder. Staleness is decided by the folder's lock, not by its pid: a folder whose pid now belongs to
+another live process is removed when nobody holds its lock, and one locked by a live process is kept
+(a run in another pid namespace or on another host of a network file system), as is an image writer's
+locked temporary folder."""
 import fcntl
 import os
 import shutil
@@ -63,8 +65,8 @@ for name, args, sig, has_outputs in runs:
     p.send_signal(sig)
     err = p.communicate(timeout=60)[1].strip()
     check(p.returncode == 128 + sig, f"{what}: exit {128 + sig} (got {p.returncode})", failures)
-    check(len(err.splitlines()) == 1 and err.startswith("repose: error: ") and f"interrupted by {sig.name}" in err,
-          f"{what}: one line ({err!r})", failures)
+    check(len(err.splitlines()) == 1 and err.startswith(f"repose: error: {out}: interrupted by {sig.name}"),
+          f"{what}: one line naming {out} ({err!r})", failures)
     check(not os.path.exists(out), f"{what}: no output folder left", failures)
     shutil.rmtree(f"{work}/out", ignore_errors=True)
 
@@ -77,21 +79,24 @@ p.wait()
 stale = temporary_folders(out)
 check(len(stale) == 1 and stale[0] == f".repose-tmp-{p.pid}", f"SIGKILL leaves {stale}", failures)
 live = subprocess.Popen(["sleep", "60"])
-os.makedirs(f"{out}/.repose-tmp-{live.pid}/frames")  # a live process's: kept
-locked = f"{out}/.repose-tmp-999999999"  # no such pid here, but its lock is held: kept
-os.makedirs(locked)
-lock = os.open(locked, os.O_RDONLY)
-fcntl.flock(lock, fcntl.LOCK_EX)
-with open(f"{out}/.repose-tmp-{p.pid}-labels.nii.gz", "wb") as f:  # an image writer's temporary file
+os.makedirs(f"{out}/.repose-tmp-{live.pid}/frames")  # its pid given to a live process, but unlocked: removed
+locks = []
+for locked in (f"{out}/.repose-tmp-999999999",  # no such pid here, but its lock is held: kept
+               f"{out}/.repose-tmp-{os.getpid()}-labels.nii.gz.d"):  # a live image writer's: kept
+    os.makedirs(locked)
+    locks.append(os.open(locked, os.O_RDONLY))
+    fcntl.flock(locks[-1], fcntl.LOCK_EX)
+with open(f"{out}/.repose-tmp-{p.pid}-labels.nii.gz", "wb") as f:  # an older image writer's temporary file
     f.write(b"partial")
 code, _, err = run("phantom", "--size", "tiny", "--out", out, check=False)
 left = sorted(temporary_folders(out))
 check(code == 0, f"the next run succeeds ({err.strip()})", failures)
-check(left == sorted([f".repose-tmp-{live.pid}", ".repose-tmp-999999999"]),
-      f"stale folder and file of the killed run removed, live and locked kept ({left})", failures)
+check(left == sorted([".repose-tmp-999999999", f".repose-tmp-{os.getpid()}-labels.nii.gz.d"]),
+      f"stale folders and file removed (one with a live process's pid), locked ones kept ({left})", failures)
 live.kill()
 live.wait()
-os.close(lock)
+for lock in locks:
+    os.close(lock)
 code, _, err = run("phantom", "--size", "tiny", "--out", out, check=False)
 check(code == 0 and temporary_folders(out) == [], f"once dead and unlocked, they go too ({temporary_folders(out)})",
       failures)

@@ -8,39 +8,22 @@ from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkIntArray, vtkPoints
 from vtkmodules.vtkCommonDataModel import VTK_TETRA, vtkUnstructuredGrid
 
-from repose import (vtkReposeBodyMesher, vtkReposeBoneWeights, vtkReposeCorotationalRelax, vtkReposePhantomSource,
-                    vtkReposePosedVolume, vtkReposeSkinning, vtkReposeSurfaceBinding, vtkReposeSurfaceDeformer,
-                    vtkReposeSurfaceExtractor)
+from repose import vtkReposeCorotationalRelax, vtkReposePosedVolume, vtkReposeSurfaceDeformer
 
-from repose_testing import check
+from repose_testing import check, tiny_pipeline
 
 failures = []
-phantom = vtkReposePhantomSource()
-phantom.SetSizeName("tiny")
-phantom.Update()
-skeleton = phantom.GetSkeletonJSON()
+tiny = tiny_pipeline()
+phantom, mesher, weights, skinning, surfaces, binding = (tiny.phantom, tiny.mesher, tiny.weights, tiny.skinning,
+                                                         tiny.surfaces, tiny.binding)
+skeleton = tiny.skeleton
 names = [j["name"] for j in json.loads(skeleton)["joints"]]
 
-mesher = vtkReposeBodyMesher()
-mesher.SetInputConnection(phantom.GetOutputPort())
-mesher.SetSkeletonJSON(skeleton)
-weights = vtkReposeBoneWeights()
-weights.SetInputConnection(mesher.GetOutputPort())
-weights.SetSkeletonJSON(skeleton)
-skinning = vtkReposeSkinning()
-skinning.SetInputConnection(weights.GetOutputPort())
-skinning.SetSkeletonJSON(skeleton)
 volume = vtkReposePosedVolume()
 volume.SetInputConnection(0, phantom.GetOutputPort())
 volume.SetInputConnection(1, weights.GetOutputPort())
 volume.SetInputConnection(2, skinning.GetOutputPort())
 volume.SetInterpolationToNearest()
-surfaces = vtkReposeSurfaceExtractor()
-surfaces.SetInputConnection(phantom.GetOutputPort())
-surfaces.SetSkeletonJSON(skeleton)
-binding = vtkReposeSurfaceBinding()
-binding.SetInputConnection(0, surfaces.GetOutputPort())
-binding.SetInputConnection(1, weights.GetOutputPort())
 deformer = vtkReposeSurfaceDeformer()
 deformer.SetInputConnection(0, binding.GetOutputPort())
 deformer.SetInputConnection(1, skinning.GetOutputPort())

@@ -300,3 +300,24 @@ def check_failed_cleanly(result, message, gone, failures, what):
           f"{what}: one line with {message!r} (got {err.strip()!r})", failures)
     for path in gone:
         check(not os.path.exists(path), f"{what}: nothing left in {os.path.basename(path)}", failures)
+
+
+def tiny_pipeline():
+    """The tiny phantom's filters wired as in vtkpython: phantom -> mesher -> weights -> skinning, and the
+    labelled surfaces bound to the tet mesh. Returns them by name (and the skeleton JSON); nothing is run."""
+    from types import SimpleNamespace
+    from repose import (vtkReposeBodyMesher, vtkReposeBoneWeights, vtkReposePhantomSource, vtkReposeSkinning,
+                        vtkReposeSurfaceBinding, vtkReposeSurfaceExtractor)
+    p = SimpleNamespace(phantom=vtkReposePhantomSource(), mesher=vtkReposeBodyMesher(), weights=vtkReposeBoneWeights(),
+                        skinning=vtkReposeSkinning(), surfaces=vtkReposeSurfaceExtractor(),
+                        binding=vtkReposeSurfaceBinding())
+    p.phantom.SetSizeName("tiny")
+    p.phantom.Update()
+    p.skeleton = p.phantom.GetSkeletonJSON()
+    for downstream, upstream in ((p.mesher, p.phantom), (p.weights, p.mesher), (p.skinning, p.weights),
+                                 (p.surfaces, p.phantom)):
+        downstream.SetInputConnection(upstream.GetOutputPort())
+        downstream.SetSkeletonJSON(p.skeleton)
+    p.binding.SetInputConnection(0, p.surfaces.GetOutputPort())
+    p.binding.SetInputConnection(1, p.weights.GetOutputPort())
+    return p

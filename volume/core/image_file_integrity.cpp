@@ -3,6 +3,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -115,9 +116,10 @@ std::int32_t headerSize(const Bytes& h, bool& swap) {
 }
 
 struct NiftiLayout {
-  double offset = -1;  ///< where the voxels start; -1 when the bytes are not a single-file NIfTI
+  double offset = -1;  ///< where the voxels start; -1 when the bytes are not a NIfTI header
   int floatBytes = 0;  ///< 4 or 8 for float32/float64 voxels, else 0
   bool swap = false;
+  bool pair = false;  ///< a two-file NIfTI (.hdr + .img): the offset is into the .img
 };
 
 /// NIfTI header of `h` (its first 544 bytes, or all when shorter): where its voxels start and what
@@ -126,9 +128,12 @@ NiftiLayout niftiLayout(const Bytes& h) {
   NiftiLayout layout;
   bool& swap = layout.swap;
   const std::int32_t size = headerSize(h, swap);
-  const bool v1 = size == 348 && h.size() >= 352 && std::memcmp(h.data() + 344, "n+1", 4) == 0;
-  const bool v2 = size == 540 && h.size() >= 544 && std::memcmp(h.data() + 4, "n+2", 3) == 0;
+  const bool pair1 = size == 348 && h.size() >= 348 && std::memcmp(h.data() + 344, "ni1", 4) == 0;
+  const bool pair2 = size == 540 && h.size() >= 540 && std::memcmp(h.data() + 4, "ni2", 3) == 0;
+  const bool v1 = pair1 || (size == 348 && h.size() >= 352 && std::memcmp(h.data() + 344, "n+1", 4) == 0);
+  const bool v2 = pair2 || (size == 540 && h.size() >= 544 && std::memcmp(h.data() + 4, "n+2", 3) == 0);
   if (!v1 && !v2) return layout;
+  layout.pair = pair1 || pair2;
   auto real = [&](std::size_t v1Offset, std::size_t v2Offset) {
     return v1 ? double(field<float>(h, v1Offset, swap)) : field<double>(h, v2Offset, swap);
   };
@@ -158,7 +163,7 @@ NiftiLayout niftiLayout(const Bytes& h) {
   if (!std::isfinite(offset) || offset < 0) throw std::runtime_error("NIfTI voxel offset is not valid");
   const int datatype = field<std::int16_t>(h, v1 ? 70 : 12, swap);
   layout.floatBytes = datatype == 16 ? 4 : datatype == 64 ? 8 : 0;
-  layout.offset = std::max(offset, v1 ? 352.0 : 544.0);
+  layout.offset = layout.pair ? offset : std::max(offset, v1 ? 352.0 : 544.0);
   return layout;
 }
 
@@ -168,6 +173,8 @@ NiftiLayout niftiLayout(const Bytes& h) {
 class NiftiScan {
 public:
   explicit NiftiScan(std::uint64_t voxelBytes) : voxelBytes_(voxelBytes) {}
+  /// For the .img of a two-file NIfTI, whose header was read apart.
+  NiftiScan(std::uint64_t voxelBytes, const NiftiLayout& layout) : voxelBytes_(voxelBytes), parsed_(true), layout_(layout) {}
   void feed(const unsigned char* p, std::size_t n) {
     if (!parsed_) {
       const std::size_t take = std::min(n, kHead - head_.size());
@@ -229,11 +236,14 @@ private:
 
 // ---- NRRD and MetaImage: text headers ------------------------------------------------------------
 
+enum class Encoding { Raw, Compressed, Ascii, Hex, Bzip2 };
+
 struct DataLocation {
   std::string file;       ///< where the voxels are
   std::uint64_t offset = 0;
-  bool compressed = false;
-  bool checkable = true;  ///< false for layouts not checked (text encodings, file lists, end-anchored data)
+  Encoding encoding = Encoding::Raw;
+  bool checkable = true;  ///< false for layouts not checked (unknown encodings, file lists, end-anchored data)
+  std::uint64_t values = 0;  ///< voxel values the header promises (NRRD's sizes), for text encodings
 };
 
 DataLocation nrrdData(const std::string& path) {
@@ -255,10 +265,18 @@ DataLocation nrrdData(const std::string& path) {
     if (!value.empty() && value[0] == '=') continue;  // key/value comment pair
     if (key == "encoding") {
       value = lower(value);
-      d.compressed = value == "gzip" || value == "gz";
-      d.checkable = d.checkable && (d.compressed || value == "raw");
+      d.encoding = value == "gzip" || value == "gz"   ? Encoding::Compressed
+                   : value == "ascii" || value == "text" || value == "txt" ? Encoding::Ascii
+                   : value == "hex"                   ? Encoding::Hex
+                   : value == "bzip2" || value == "bz2" ? Encoding::Bzip2
+                                                      : Encoding::Raw;
+      d.checkable = d.checkable && (d.encoding != Encoding::Raw || value == "raw");
+    } else if (key == "sizes") {
+      std::istringstream sizes(value);
+      d.values = 1;
+      for (std::uint64_t n = 0; sizes >> n;) d.values *= n;
     } else if (key == "data file" || key == "datafile") {
-      if (value.find(' ') != std::string::npos || value == "LIST") return {path, 0, false, false};
+      if (value.find(' ') != std::string::npos || value == "LIST") return {path, 0, Encoding::Raw, false};
       d.file = value[0] == '/' ? value : directoryOf(path) + value;
       d.offset = 0;
     } else if (key == "line skip" || key == "lineskip") {
@@ -280,7 +298,7 @@ DataLocation metaImageData(const std::string& path) {
     if (eq == std::string::npos) continue;
     const std::string key = lower(trim(line.substr(0, eq)));
     const std::string value = trim(line.substr(eq + 1));
-    if (key == "compresseddata") d.compressed = lower(value) == "true";
+    if (key == "compresseddata") d.encoding = lower(value) == "true" ? Encoding::Compressed : Encoding::Raw;
     if (key == "headersize" && value != "0") d.checkable = false;
     if (key == "elementdatafile") {
       if (value == "LOCAL") {
@@ -296,18 +314,55 @@ DataLocation metaImageData(const std::string& path) {
   throw std::runtime_error("MetaImage header has no ElementDataFile");
 }
 
-void checkDataLocation(const DataLocation& d, std::uint64_t voxelBytes) {
-  if (!d.checkable) return;
+/// Counts what a text encoding holds from the current position of `in` to its end: numbers (ASCII,
+/// separated by white space or commas) or hex digits (white space between them ignored).
+std::uint64_t countText(std::istream& in, Encoding encoding) {
+  std::uint64_t count = 0;
+  bool inToken = false;
+  std::vector<char> chunk(1 << 18);
+  while (in.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) || in.gcount()) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      const unsigned char c = static_cast<unsigned char>(chunk[std::size_t(i)]);
+      const bool separator = std::isspace(c) || (encoding == Encoding::Ascii && c == ',');
+      if (encoding == Encoding::Hex) {
+        if (std::isxdigit(c)) ++count;
+        else if (!separator) throw std::runtime_error("hex data holds a character that is not a hex digit");
+      } else {
+        count += !separator && !inToken ? 1 : 0;
+        inToken = !separator;
+      }
+    }
+  }
+  return count;
+}
+
+void checkDataAt(const DataLocation& d, std::uint64_t voxelBytes) {
+  if (d.encoding == Encoding::Bzip2)
+    throw std::runtime_error("bzip2-encoded NRRD data cannot be read; save it raw or gzip-encoded");
   std::ifstream in = openBinary(d.file);
   in.seekg(0, std::ios::end);
   const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
   if (d.offset > size) requireBytes(0, voxelBytes);
-  if (!d.compressed) {
-    requireBytes(size - d.offset, voxelBytes);
-    return;
-  }
   in.seekg(static_cast<std::streamoff>(d.offset));
-  requireBytes(inflateToEnd(in), voxelBytes);
+  if (d.encoding == Encoding::Raw) return requireBytes(size - d.offset, voxelBytes);
+  if (d.encoding == Encoding::Compressed) return requireBytes(inflateToEnd(in), voxelBytes);
+  const std::uint64_t count = countText(in, d.encoding);
+  const bool hex = d.encoding == Encoding::Hex;
+  const std::uint64_t needed = hex ? 2 * voxelBytes : d.values;
+  if (count < needed)
+    throw std::runtime_error("file holds " + std::to_string(count) + (hex ? " hex digits" : " values") +
+                             ", its header promises " + std::to_string(needed) +
+                             " (the file is truncated or its header is wrong)");
+}
+
+void checkDataLocation(const std::string& header, const DataLocation& d, std::uint64_t voxelBytes) {
+  if (!d.checkable) return;
+  try {
+    checkDataAt(d, voxelBytes);
+  } catch (const std::runtime_error& e) {
+    if (d.file == header) throw;
+    throw std::runtime_error("data file " + d.file + ": " + e.what());  // the file at fault, named
+  }
 }
 
 /// Every number of a geometry field ("(1,0,0) (0,1,0)", "8 8 10") must be finite; "none" marks a
@@ -348,6 +403,61 @@ bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && lower(s.substr(s.size() - suffix.size())) == suffix;
 }
 
+/// Passes a whole file's bytes to `sink`, inflated (and checked) when the file is gzip.
+void streamFile(const std::string& path, const Sink& sink) {
+  std::ifstream in = openBinary(path);
+  unsigned char magic[2] = {0, 0};
+  in.read(reinterpret_cast<char*>(magic), 2);
+  in.clear();
+  in.seekg(0);
+  if (magic[0] == 0x1f && magic[1] == 0x8b) {
+    inflateToEnd(in, sink);
+    return;
+  }
+  Bytes chunk(1 << 18);
+  while (in.read(reinterpret_cast<char*>(chunk.data()), static_cast<std::streamsize>(chunk.size())) || in.gcount())
+    sink(chunk.data(), static_cast<std::size_t>(in.gcount()));
+}
+
+// ---- two-file NIfTI (.hdr + .img) ----------------------------------------------------------------
+
+bool isNiftiData(const std::string& path) { return endsWith(path, ".img") || endsWith(path, ".img.gz"); }
+
+/// The other file of a two-file NIfTI named by `path` (.hdr <-> .img, gzipped or not: the first that
+/// exists, else the plain name); "" when `path` is named as neither.
+std::string niftiCompanion(const std::string& path) {
+  for (const char* ext : {".hdr", ".img", ".hdr.gz", ".img.gz"}) {
+    if (!endsWith(path, ext)) continue;
+    const std::string stem = path.substr(0, path.size() - std::strlen(ext));
+    const std::string other = stem + (ext[1] == 'h' ? ".img" : ".hdr");
+    return std::ifstream(other) || !std::ifstream(other + ".gz") ? other : other + ".gz";
+  }
+  return "";
+}
+
+/// The first 544 bytes of a NIfTI header file (fewer when it is shorter), gzipped or not.
+Bytes niftiHead(const std::string& path) {
+  gzFile gz = gzopen(path.c_str(), "rb");  // reads plain files as they are
+  if (!gz) throw std::runtime_error(path + " cannot be opened");
+  Bytes head(544);
+  const int got = gzread(gz, head.data(), static_cast<unsigned>(head.size()));
+  gzclose(gz);
+  head.resize(got > 0 ? std::size_t(got) : 0);
+  return head;
+}
+
+/// The .img of a two-file NIfTI holds every voxel its header promises (and finite floats).
+void checkNiftiData(const std::string& data, const NiftiLayout& layout, std::uint64_t voxelBytes) {
+  if (!std::ifstream(data)) throw std::runtime_error("data file " + data + " is missing or unreadable");
+  try {
+    NiftiScan scan(voxelBytes, layout);
+    streamFile(data, [&](const unsigned char* p, std::size_t n) { scan.feed(p, n); });
+    scan.finish();
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("data file " + data + ": " + e.what());
+  }
+}
+
 }  // namespace
 
 void checkImageHeader(const std::string& path) {
@@ -356,33 +466,23 @@ void checkImageHeader(const std::string& path) {
   in.read(magic, 4);
   if (std::memcmp(magic, "NRRD", 4) == 0) return checkTextHeaderGeometry(path, ':');
   if (endsWith(path, ".mha") || endsWith(path, ".mhd")) return checkTextHeaderGeometry(path, '=');
-  gzFile gz = gzopen(path.c_str(), "rb");  // reads plain files as they are
-  if (!gz) throw std::runtime_error("cannot be opened");
-  Bytes head(544);
-  const int got = gzread(gz, head.data(), static_cast<unsigned>(head.size()));
-  gzclose(gz);
-  head.resize(got > 0 ? std::size_t(got) : 0);
-  niftiLayout(head);
+  niftiLayout(niftiHead(isNiftiData(path) ? niftiCompanion(path) : path));
 }
 
 void checkImageFileIntegrity(const std::string& path, std::uint64_t voxelBytes) {
-  std::ifstream in = openBinary(path);
-  unsigned char magic[4] = {0, 0, 0, 0};
-  in.read(reinterpret_cast<char*>(magic), 4);
-  in.clear();
-  in.seekg(0);
-  NiftiScan nifti(voxelBytes);
-  const Sink sink = [&](const unsigned char* p, std::size_t n) { nifti.feed(p, n); };
-  if (magic[0] == 0x1f && magic[1] == 0x8b) {  // a whole-file gzip (.nii.gz)
-    inflateToEnd(in, sink);
-    nifti.finish();
-    return;
+  const std::string companion = niftiCompanion(path);
+  if (!companion.empty()) {
+    const std::string header = isNiftiData(path) ? companion : path, data = isNiftiData(path) ? path : companion;
+    const NiftiLayout layout = niftiLayout(niftiHead(header));
+    if (layout.pair) return checkNiftiData(data, layout, voxelBytes);
   }
-  if (std::memcmp(magic, "NRRD", 4) == 0) return checkDataLocation(nrrdData(path), voxelBytes);
-  if (endsWith(path, ".mha") || endsWith(path, ".mhd")) return checkDataLocation(metaImageData(path), voxelBytes);
-  Bytes chunk(1 << 18);
-  while (in.read(reinterpret_cast<char*>(chunk.data()), static_cast<std::streamsize>(chunk.size())) || in.gcount())
-    sink(chunk.data(), static_cast<std::size_t>(in.gcount()));
+  std::ifstream in = openBinary(path);
+  char magic[4] = {0, 0, 0, 0};
+  in.read(magic, 4);
+  if (std::memcmp(magic, "NRRD", 4) == 0) return checkDataLocation(path, nrrdData(path), voxelBytes);
+  if (endsWith(path, ".mha") || endsWith(path, ".mhd")) return checkDataLocation(path, metaImageData(path), voxelBytes);
+  NiftiScan nifti(voxelBytes);
+  streamFile(path, [&](const unsigned char* p, std::size_t n) { nifti.feed(p, n); });
   nifti.finish();
 }
 

@@ -13,6 +13,8 @@ from vtkmodules.vtkIOXML import (vtkXMLPolyDataReader, vtkXMLPolyDataWriter, vtk
 from repose import (vtkReposeCorotationalRelax, vtkReposeImageReader, vtkReposeImageWriter, vtkReposeLabelTable,
                     vtkReposePosedVolume, vtkReposeSkeletonPoses, vtkReposeSkinning, vtkReposeSurfaceDeformer)
 
+from .checked_files import WriteFailure, check_written, failure_reason, write_text
+
 # Settings words -> the relaxation filter's numbers (as Pipeline::setRelaxation* maps them).
 RELAX_MODEL = {"fixed-corotated": 1, "linear": 0}
 RELAX_VOLUME = {"tissues": 3, "segments": 2, "body": 1, "none": 0}
@@ -88,8 +90,11 @@ def write_xml(writer_type, data, path):
     writer.SetInputData(data)
     writer.SetDataModeToAppended()
     writer.EncodeAppendedDataOff()
+    for source in (writer, writer.GetExecutive()):  # their multi-line texts: the failure is reported below
+        source.AddObserver("ErrorEvent", lambda *_: None)
     if not writer.Write():
-        raise RuntimeError(f"{path}: cannot write")
+        raise WriteFailure(path, failure_reason(path))
+    check_written(path)  # Write() reports success even when the disk took only part of the file
 
 
 def read_xml(reader_type, path):
@@ -260,8 +265,7 @@ class CasePoser:
             if self.label_table is not None:  # names and colours beside it, as `repose pose` writes them
                 for name, text in (("posed_labels.tsv", self.label_table.GetTsv()),
                                    ("posed_labels.ctbl", self.label_table.GetSlicerColorTable())):
-                    with open(os.path.join(folder, name), "w") as f:
-                        f.write(text)
+                    write_text(os.path.join(folder, name), text)
         if posed["image"] is not None:
             files.append("posed_image" + image_ext)
             write_image(posed["image"], os.path.join(folder, files[-1]))

@@ -5,17 +5,23 @@ import io
 import json
 import os
 import platform
-import tempfile
+
+from .checked_files import sync_folder, write_text
 
 COLUMNS = ("subject", "task", "kind", "status", "ran", "started", "finished", "seconds", "posing_seconds",
            "body_volume_ratio", "worst_bone", "worst_bone_dice", "inverted_tets", "worker", "output", "key", "message")
 
 
 def _replace(path, text):
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", dir=os.path.dirname(path))
-    with os.fdopen(fd, "w", newline="") as f:
-        f.write(text)
-    os.replace(tmp, path)
+    """Writes beside `path`, checks, then renames over it: a reader sees the old file or the new one."""
+    tmp = os.path.join(os.path.dirname(path), f".{os.path.basename(path)}.{os.getpid()}.tmp")
+    try:
+        write_text(tmp, text, path)
+        os.replace(tmp, path)
+    finally:
+        if os.path.lexists(tmp):
+            os.remove(tmp)
+    sync_folder(os.path.dirname(path))
 
 
 def previous_failures(out_dir):

@@ -1,10 +1,13 @@
 """Result folders written atomically: a task writes into a hidden folder beside its result and renames
 it into place when everything is in it, with RESULT_FILE (its key, figures and times) inside. A folder
-under the final name is therefore complete, and complete for the inputs its key names."""
+under the final name is therefore complete, and complete for the inputs its key names. Every file in it
+is checked and on the disk before the rename (checked_files), and the rename itself is flushed."""
 import json
 import os
 import shutil
 import uuid
+
+from .checked_files import check_written, sync_folder, write_text
 
 RESULT_FILE = "batch_task.json"
 
@@ -20,16 +23,21 @@ def staging_dir(final_dir):
 
 def publish(staging, final_dir, record):
     """Writes the record into `staging` and moves it to `final_dir`, replacing an older result."""
-    with open(os.path.join(staging, RESULT_FILE), "w") as f:
-        json.dump(record, f, indent=2, sort_keys=True)
-        f.write("\n")
+    write_text(os.path.join(staging, RESULT_FILE), json.dumps(record, indent=2, sort_keys=True) + "\n")
+    check_written(staging, final_dir)  # every file, its companions too, complete and flushed
     old = None
     if os.path.lexists(final_dir):
         old = staging + ".old"
         os.rename(final_dir, old)
     os.rename(staging, final_dir)
+    sync_folder(os.path.dirname(final_dir.rstrip("/")))
     if old:
         shutil.rmtree(old, ignore_errors=True)
+
+
+def final_paths(message, staging, final_dir):
+    """A message with the staging folder's paths turned into the final folder's (the files the user sees)."""
+    return message.replace(staging, final_dir.rstrip("/")) if staging else message
 
 
 def sweep(root):

@@ -11,6 +11,7 @@ import traceback
 from datetime import datetime, timezone
 
 from . import store
+from .checked_files import write_text
 from .manifest import PREPARE_OPTIONS
 
 _local = threading.local()  # per worker thread: the case it has loaded (tasks of a thread run one at a time)
@@ -67,8 +68,7 @@ def prepare_subject(task):
     try:
         cmd = prepare_command(task, staging)
         p = subprocess.run(_dying_with_worker(cmd), capture_output=True, text=True)
-        with open(os.path.join(staging, "prepare.log"), "w") as f:
-            f.write(" ".join(cmd) + "\n" + p.stdout + p.stderr)
+        write_text(os.path.join(staging, "prepare.log"), " ".join(cmd) + "\n" + p.stdout + p.stderr)
         if p.returncode != 0:
             lines = [line for line in p.stderr.splitlines() if line.strip()] or [f"exit code {p.returncode}"]
             raise RuntimeError(lines[-1].replace("repose: error: ", "", 1))
@@ -76,7 +76,7 @@ def prepare_subject(task):
         store.publish(staging, task["out"], _finish(record, t0))
     except Exception as e:  # noqa: BLE001 - every failure becomes the task's message
         store.discard(staging)
-        record["message"] = _one_line(e)
+        record["message"] = store.final_paths(_one_line(e), staging, task["out"])
         _finish(record, t0)
     return record
 
@@ -128,14 +128,14 @@ def pose_task(prepared, task):
         record["files"] = poser.write(posed, task["outputs"], task["format"], staging)
         record.update(poser.figures.figures(posed["mesh"], posed["labels"]))
         if task["kind"] == "frame":
-            with open(os.path.join(staging, "pose.json"), "w") as f:
-                f.write(pose_json)
+            write_text(os.path.join(staging, "pose.json"), pose_json)
             record["files"].append("pose.json")
         record["status"] = "done"
         store.publish(staging, task["out"], _finish(record, t0))
     except Exception as e:  # noqa: BLE001 - every failure becomes the task's message
         if staging:
             store.discard(staging)
-        record["message"] = _one_line(e) or _one_line(traceback.format_exc().splitlines()[-1])
+        message = _one_line(e) or _one_line(traceback.format_exc().splitlines()[-1])
+        record["message"] = store.final_paths(message, staging, task["out"])
         _finish(record, t0)
     return record
