@@ -2,6 +2,10 @@
 
 #include "dicom_slice_stack.h"
 
+#include "vtkFieldData.h"
+#include "vtkImageData.h"
+#include "vtkStringArray.h"
+
 #include "gdcmUIDGenerator.h"
 #include "itkGDCMImageIO.h"
 #include "itkGDCMSeriesFileNames.h"
@@ -102,6 +106,21 @@ std::vector<std::string> SeriesFiles(const std::string& folder, const std::strin
 }
 
 } // namespace
+
+DicomTags DicomTagsOf(vtkImageData* image)
+{
+  DicomTags tags;
+  auto* array = vtkStringArray::SafeDownCast(image->GetFieldData()->GetAbstractArray("DicomTags"));
+  for (vtkIdType i = 0; array && i < array->GetNumberOfValues(); ++i)
+  {
+    const std::string entry = array->GetValue(i);
+    if (entry.size() > 10 && entry[4] == '|' && entry[9] == '=')
+    {
+      tags.emplace_back(entry.substr(0, 9), entry.substr(10));
+    }
+  }
+  return tags;
+}
 
 DicomSeriesVolume ReadDicomSeries(const std::string& folder, const std::string& seriesUID)
 {

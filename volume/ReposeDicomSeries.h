@@ -9,11 +9,17 @@
 #include <utility>
 #include <vector>
 
+class vtkImageData;
+
 namespace repose
 {
 
 /// DICOM attributes as "gggg|eeee" keys (ITK's spelling) and their text values.
 using DicomTags = std::vector<std::pair<std::string, std::string>>;
+
+/// The attributes an image carries in its field data ("DicomTags": "gggg|eeee=value" strings, as
+/// vtkReposeImageReader fills them from a DICOM series); empty when it has none.
+DicomTags DicomTagsOf(vtkImageData* image);
 
 struct DicomSeriesVolume
 {

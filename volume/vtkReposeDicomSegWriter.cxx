@@ -10,9 +10,7 @@
 
 #include "ReposeDicomSegmentation.h"
 
-#include <filesystem>
 #include <stdexcept>
-#include <unistd.h>
 
 vtkStandardNewMacro(vtkReposeDicomSegWriter);
 
@@ -51,42 +49,16 @@ void vtkReposeDicomSegWriter::RemoveAllSegments()
 int vtkReposeDicomSegWriter::RequestData(vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0]);
-  const std::string target = this->FileName ? this->FileName : "";
-  auto fail = [this](const std::string& reason) { return this->Fail(reason); };
-  if (target.empty())
-  {
-    return fail("no file name set");
-  }
   if (!input || !input->GetPointData()->GetScalars() || input->GetNumberOfPoints() < 1)
   {
-    return fail("input has no label scalars");
+    return this->Fail("input has no label scalars");
   }
-  repose::DicomTags carried;
-  auto* tags = vtkStringArray::SafeDownCast(input->GetFieldData()->GetAbstractArray("DicomTags"));
-  for (vtkIdType i = 0; tags && i < tags->GetNumberOfValues(); ++i)
-  {
-    const std::string entry = tags->GetValue(i);
-    if (entry.size() > 10 && entry[4] == '|' && entry[9] == '=')
-    {
-      carried.emplace_back(entry.substr(0, 9), entry.substr(10));
-    }
-  }
-  const std::filesystem::path finalPath(target);
-  const std::filesystem::path temporary = finalPath.parent_path() /
-    ("." + finalPath.filename().string() + ".tmp-" + std::to_string(::getpid()));
-  std::error_code ignored;
-  try
-  {
-    repose::WriteDicomSegmentation(repose::LabelGridOf(input, true), this->Table->List, temporary.string(), carried,
-      this->SeriesDescription ? this->SeriesDescription : "");
-    std::filesystem::rename(temporary, finalPath);
-  }
-  catch (const std::exception& e)
-  {
-    std::filesystem::remove(temporary, ignored);
-    return fail(e.what());
-  }
-  return 1;
+  const repose::DicomTags carried = repose::DicomTagsOf(input);
+  const repose::LabelGrid labels = repose::LabelGridOf(input, true);
+  const std::string description = this->SeriesDescription ? this->SeriesDescription : "";
+  return this->WriteAtomically([&](const std::string& path) {
+    repose::WriteDicomSegmentation(labels, this->Table->List, path, carried, description);
+  });
 }
 
 void vtkReposeDicomSegWriter::PrintSelf(ostream& os, vtkIndent indent)

@@ -14,15 +14,12 @@
 
 #include "gdcmUIDGenerator.h"
 
-#include <filesystem>
 #include <stdexcept>
-#include <unistd.h>
 
 vtkStandardNewMacro(vtkReposeDicomSeriesWriter);
 
 namespace
 {
-namespace fs = std::filesystem;
 
 // The input as ITK's float volume, same geometry (LPS), voxel values unchanged.
 itk::Image<float, 3>::Pointer ToItk(vtkImageData* input)
@@ -60,21 +57,6 @@ itk::Image<float, 3>::Pointer ToItk(vtkImageData* input)
   return image;
 }
 
-repose::DicomTags CarriedTags(vtkImageData* input)
-{
-  repose::DicomTags tags;
-  auto* array = vtkStringArray::SafeDownCast(input->GetFieldData()->GetAbstractArray("DicomTags"));
-  for (vtkIdType i = 0; array && i < array->GetNumberOfValues(); ++i)
-  {
-    const std::string entry = array->GetValue(i);
-    const auto eq = entry.find('=');
-    if (eq == 9 && entry[4] == '|') // "gggg|eeee=value"
-    {
-      tags.emplace_back(entry.substr(0, eq), entry.substr(eq + 1));
-    }
-  }
-  return tags;
-}
 }
 
 vtkReposeDicomSeriesWriter::vtkReposeDicomSeriesWriter() = default;
@@ -104,43 +86,17 @@ int vtkReposeDicomSeriesWriter::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0]);
-  const std::string target = this->FileName ? this->FileName : "";
   auto fail = [this](const std::string& reason) { return this->Fail(reason); };
-  if (target.empty())
-  {
-    return fail("no folder name set");
-  }
   if (!input || !input->GetPointData()->GetScalars() || input->GetNumberOfPoints() < 1 ||
     input->GetPointData()->GetScalars()->GetNumberOfComponents() != 1)
   {
     return fail("input has no one-component image scalars");
   }
-  if (fs::exists(target))
-  {
-    return fail("it exists already");
-  }
-  fs::path finalPath(target);
-  if (finalPath.filename().empty())
-  {
-    finalPath = finalPath.parent_path();
-  }
-  const fs::path temporary =
-    finalPath.parent_path() / ("." + finalPath.filename().string() + ".tmp-" + std::to_string(getpid()));
-  try
-  {
-    std::error_code ignored;
-    fs::remove_all(temporary, ignored);
-    repose::WriteDicomSeries(ToItk(input), temporary.string(), CarriedTags(input),
-      this->SeriesDescription ? this->SeriesDescription : "");
-    fs::rename(temporary, finalPath);
-  }
-  catch (const std::exception& e)
-  {
-    std::error_code ignored;
-    fs::remove_all(temporary, ignored);
-    return fail(e.what());
-  }
-  return 1;
+  const auto image = ToItk(input);
+  const repose::DicomTags carried = repose::DicomTagsOf(input);
+  const std::string description = this->SeriesDescription ? this->SeriesDescription : "";
+  return this->WriteAtomically(
+    [&](const std::string& folder) { repose::WriteDicomSeries(image, folder, carried, description); });
 }
 
 void vtkReposeDicomSeriesWriter::PrintSelf(ostream& os, vtkIndent indent)

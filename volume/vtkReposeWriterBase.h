@@ -6,6 +6,7 @@
 #include "ReposeVolumeModule.h"
 #include "vtkImageAlgorithm.h"
 
+#include <functional>
 #include <string>
 
 class REPOSEVOLUME_EXPORT vtkReposeWriterBase : public vtkImageAlgorithm
@@ -31,6 +32,11 @@ protected:
   int FillOutputPortInformation(int port, vtkInformation* info) override;
   /// Records "NAME: cannot write (reason)", reports it through vtkErrorMacro and returns 0.
   int Fail(const std::string& reason);
+  /// Writes FileName atomically: `write` is given a path inside a locked temporary folder beside it
+  /// (.repose-tmp-<pid>-NAME.d/NAME, see temporary_lock.h) to write a file or a folder at; the result
+  /// is flushed to the disk and renamed into place, the temporary folder removed. An exception of
+  /// `write` (its what() the reason) or a failed check leaves nothing. Returns 1, or Fail's 0.
+  int WriteAtomically(const std::function<void(const std::string& path)>& write);
 
   char* FileName = nullptr;
   std::string LastError;
