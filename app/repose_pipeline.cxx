@@ -858,7 +858,9 @@ std::string Pipeline::relaxationSummary() const {
     << (relax_->GetWarmStarted() ? ", started from the last relaxation" : "")
     << (relax_->GetContinuationSteps() > 0
           ? std::string(", fold-free continuation ") + std::to_string(relax_->GetContinuationSteps()) + " steps " +
-              (relax_->GetContinuationUsed() ? "(kept)" : "(not kept)")
+              (relax_->GetContinuationUsed() ? "(kept)"
+                                             : "(not kept: it met a fold no pose on its way avoids; "
+                                               "--relax-continuation never saves its time)")
           : std::string())
     << ", " << relax_->GetLastRelaxTime() << " s (assembly " << relax_->GetLastAssemblyTime() << " s, solves "
     << relax_->GetLastSolveTime() << " s, strained region " << relax_->GetLastStrainedRegionTime()
