@@ -56,6 +56,7 @@
 #include "pose_quality.h"
 #include "label_table.h"
 #include "tet_mesh.h"
+#include "array_names.h"
 
 namespace repose {
 namespace {
@@ -212,12 +213,12 @@ vtkSmartPointer<vtkUnstructuredGrid> readCaseMesh(const std::string& path, const
     if (mesh->GetCellType(c) != VTK_TETRA)
       throw std::runtime_error(path + ": cell " + std::to_string(c) + " is not a tetrahedron");
   const vtkIdType nodes = mesh->GetNumberOfPoints();
-  vtkDataArray* weights = vtkDataArray::SafeDownCast(mesh->GetPointData()->GetAbstractArray("Weights"));
+  vtkDataArray* weights = vtkDataArray::SafeDownCast(mesh->GetPointData()->GetAbstractArray(repose::arrays::kWeights));
   const int influences = weights ? weights->GetNumberOfComponents() : 1;
-  requireValues(caseArray(mesh->GetPointData(), "Weights", influences, nodes, path), 0, -1, path);
+  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kWeights, influences, nodes, path), 0, -1, path);
   const double lastBone = double(skeleton.joints.size()) - 1;
-  requireValues(caseArray(mesh->GetPointData(), "BoneIds", influences, nodes, path), 0, lastBone, path);
-  requireValues(caseArray(mesh->GetPointData(), "FixedBone", 1, nodes, path), -1, lastBone, path);
+  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kBoneIds, influences, nodes, path), 0, lastBone, path);
+  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kFixedBone, 1, nodes, path), -1, lastBone, path);
   return mesh;
 }
 
@@ -225,10 +226,10 @@ vtkSmartPointer<vtkPolyData> readCaseSurfaces(const std::string& path, vtkIdType
   auto surfaces = vtkSmartPointer<vtkPolyData>::New();
   surfaces->ShallowCopy(readXmlMesh<vtkXMLPolyDataReader>(path));
   const vtkIdType n = surfaces->GetNumberOfPoints();
-  requireValues(caseArray(surfaces->GetPointData(), "BoundTet", 1, n, path), 0, double(tets) - 1, path);
-  requireValues(caseArray(surfaces->GetPointData(), "BoundWeights", 4, n, path), 0, -1, path);
-  if (!vtkIntArray::SafeDownCast(surfaces->GetPointData()->GetArray("BoundTet")) ||
-      !vtkFloatArray::SafeDownCast(surfaces->GetPointData()->GetArray("BoundWeights")))
+  requireValues(caseArray(surfaces->GetPointData(), repose::arrays::kBoundTet, 1, n, path), 0, double(tets) - 1, path);
+  requireValues(caseArray(surfaces->GetPointData(), repose::arrays::kBoundWeights, 4, n, path), 0, -1, path);
+  if (!vtkIntArray::SafeDownCast(surfaces->GetPointData()->GetArray(repose::arrays::kBoundTet)) ||
+      !vtkFloatArray::SafeDownCast(surfaces->GetPointData()->GetArray(repose::arrays::kBoundWeights)))
     throw std::runtime_error(path + ": BoundTet must be int32 and BoundWeights float32");
   return surfaces;
 }
@@ -271,7 +272,7 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
     // Float files holding whole numbers are common for label maps; anything else is not a label map.
     const vtkIdType n = scalars->GetNumberOfTuples();
     auto labels = vtkSmartPointer<vtkIntArray>::New();
-    labels->SetName("Labels");
+    labels->SetName(repose::arrays::kLabels);
     labels->SetNumberOfTuples(n);
     for (vtkIdType i = 0; i < n; ++i) {
       const double v = scalars->GetTuple1(i);
@@ -283,7 +284,7 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
     image->GetPointData()->SetScalars(labels);
   }
   vtkIntArray* labels = vtkIntArray::SafeDownCast(image->GetPointData()->GetScalars());
-  labels->SetName("Labels");
+  labels->SetName(repose::arrays::kLabels);
   // Tables indexed by label value are sized by the largest label: bound it before anyone allocates.
   bool any = false;
   for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n; ++i) {
@@ -457,7 +458,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   auto weightErrors = captureErrors(weights);
   weights->Update();
   vtkUnstructuredGrid* weighted = weights->GetOutput();
-  requireOutput(weighted && weighted->GetPointData()->GetArray("Weights"), "bone weights", weightErrors);
+  requireOutput(weighted && weighted->GetPointData()->GetArray(repose::arrays::kWeights), "bone weights", weightErrors);
   timed("weights", secondsSince(t0));
   {
     std::ostringstream m;
@@ -488,7 +489,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   binding->SetInputData(1, restMesh_);
   auto bindingErrors = captureErrors(binding);
   binding->Update();
-  requireOutput(binding->GetOutput()->GetPointData()->GetArray("BoundTet") != nullptr, "surface binding",
+  requireOutput(binding->GetOutput()->GetPointData()->GetArray(repose::arrays::kBoundTet) != nullptr, "surface binding",
                 bindingErrors);
   restSurfaces_ = vtkSmartPointer<vtkPolyData>::New();
   restSurfaces_->ShallowCopy(binding->GetOutput());
@@ -672,7 +673,7 @@ DeformationStats Pipeline::posedStats() {
   restMeshVolume();  // caches the connectivity
   if (tetLabels_.size() != std::size_t(tets_.rows())) {
     tetLabels_.assign(std::size_t(tets_.rows()), 0);
-    if (vtkDataArray* labels = restMesh_->GetCellData()->GetArray("Label"))
+    if (vtkDataArray* labels = restMesh_->GetCellData()->GetArray(repose::arrays::kLabel))
       for (vtkIdType c = 0; c < labels->GetNumberOfTuples() && c < tets_.rows(); ++c)
         tetLabels_[std::size_t(c)] = static_cast<std::int32_t>(labels->GetTuple1(c));
   }

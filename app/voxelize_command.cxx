@@ -31,6 +31,7 @@
 #include "ReposeImageConversion.h"
 #include "repose_pipeline.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 namespace repose {
 
@@ -307,7 +308,7 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   const std::filesystem::path out(outPath);
   AtomicOutputs files(out.has_parent_path() ? out.parent_path().string() : ".");
   {
-    vtkSmartPointer<vtkImageData> image = repose_vtk::ToImage<vtkIntArray>(labels, "Labels");
+    vtkSmartPointer<vtkImageData> image = repose_vtk::ToImage<vtkIntArray>(labels, repose::arrays::kLabels);
     std::vector<std::int32_t>().swap(labels.data);  // the image holds the only copy while it is written
     writeLabelImage(image, files.stage(out.filename().string()));
   }

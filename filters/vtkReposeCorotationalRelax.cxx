@@ -20,6 +20,7 @@
 #include "body_segments.h"
 #include "corotational_fem.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 vtkStandardNewMacro(vtkReposeCorotationalRelax);
 
@@ -67,7 +68,7 @@ int vtkReposeCorotationalRelax::RequestData(
     vtkErrorMacro("needs the posed tet mesh (input 0) and the rest tet mesh (input 1)");
     return 0;
   }
-  vtkDataArray* fixed = rest->GetPointData()->GetArray("FixedBone");
+  vtkDataArray* fixed = rest->GetPointData()->GetArray(repose::arrays::kFixedBone);
   if (!fixed || rest->GetNumberOfPoints() != posed->GetNumberOfPoints() ||
     rest->GetNumberOfCells() != posed->GetNumberOfCells())
   {
@@ -138,7 +139,7 @@ int vtkReposeCorotationalRelax::RequestData(
     {
       options.volumeRegions = repose::bodySegments(
         repose_vtk::ToSparseWeights(rest->GetPointData(), rest->GetNumberOfPoints()), tets);
-      vtkDataArray* labels = rest->GetCellData()->GetArray("Label");
+      vtkDataArray* labels = rest->GetCellData()->GetArray(repose::arrays::kLabel);
       if (volumeRegions == 3 && labels && labels->GetNumberOfTuples() == nt)
       {
         std::vector<int> tetLabels(static_cast<std::size_t>(nt));
