@@ -8,13 +8,13 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <vtkImageData.h>  // complete for the inline accessors below
+#include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
 
 class vtkAlgorithm;
 class vtkObject;
-class vtkImageData;
-class vtkPolyData;
-class vtkUnstructuredGrid;
 class vtkReposeBodyMesher;
 class vtkReposeCorotationalRelax;
 class vtkReposeBoneWeights;
