@@ -775,35 +775,23 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
   if (displacementResampler_) displacementResampler_->SetInputConnection(2, port);
 }
 
-namespace {
-// The number a word stands for among the choices of a setting; names the setting and the words otherwise.
-int choice(const std::string& word, std::initializer_list<std::pair<const char*, int>> choices, const char* setting) {
-  std::string expected;
-  for (const auto& [name, value] : choices) {
-    if (word == name) return value;
-    expected += (expected.empty() ? "" : ", ") + std::string(name);
-  }
-  throw std::runtime_error("unknown " + std::string(setting) + " '" + word + "' (expected " + expected + ")");
-}
-}  // namespace
-
-void Pipeline::setRelaxationModel(const std::string& model) {
-  relaxModel_ = choice(model, {{"fixed-corotated", 1}, {"fixed", 1}, {"linear", 0}}, "relaxation model");
+void Pipeline::setRelaxationModel(vtkReposeCorotationalRelax::ModelType model) {
+  relaxModel_ = model;
   if (relax_) relax_->SetModel(relaxModel_);
 }
 
-void Pipeline::setRelaxationVolume(const std::string& regions) {
-  relaxVolume_ = choice(regions, {{"tissues", 3}, {"segments", 2}, {"body", 1}, {"none", 0}}, "relaxation volume regions");
+void Pipeline::setRelaxationVolume(vtkReposeCorotationalRelax::VolumeRegionsType regions) {
+  relaxVolume_ = regions;
   if (relax_) relax_->SetVolumeRegions(relaxVolume_);
 }
 
-void Pipeline::setRelaxationContinuation(const std::string& mode) {
-  relaxContinuation_ = choice(mode, {{"if-inverted", 1}, {"never", 0}, {"always", 2}}, "relaxation continuation");
+void Pipeline::setRelaxationContinuation(vtkReposeCorotationalRelax::ContinuationType mode) {
+  relaxContinuation_ = mode;
   if (relax_) relax_->SetContinuation(relaxContinuation_);
 }
 
-void Pipeline::setRelaxationStrainedRegion(const std::string& mode) {
-  relaxStrainedRegionFirst_ = choice(mode, {{"first", 1}, {"off", 0}}, "relaxation strained region") != 0;
+void Pipeline::setRelaxationStrainedRegion(bool first) {
+  relaxStrainedRegionFirst_ = first;
   if (relax_) relax_->SetStrainedRegionThreshold(relaxStrainedRegionFirst_ ? relaxStrainedRegionThreshold_ : 0.0);
 }
 
@@ -826,7 +814,8 @@ std::string Pipeline::relaxationSummary() const {
     pinched << ", " << relax_->GetPinchedNodes() << " nodes pinched between bones (up to "
             << std::setprecision(2) << relax_->GetPinchedShortfall() << " mm short of room: no solve can unfold them)";
   m << "FEM relaxation: ";
-  if (relax_->GetModel() == 1) m << relax_->GetNewtonIterations() << " Newton iterations, ";
+  if (relax_->GetModel() == vtkReposeCorotationalRelax::MODEL_FIXED_COROTATED)
+    m << relax_->GetNewtonIterations() << " Newton iterations, ";
   m << relax_->GetCGIterations() << " CG iterations, relative residual "
     << relax_->GetRelativeResidual() << ", inverted tets " << relax_->GetInvertedBefore() << " -> "
     << relax_->GetInvertedAfter()
