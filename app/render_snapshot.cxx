@@ -1,5 +1,6 @@
 #include "render_snapshot.h"
 #include "checked_write.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -27,7 +28,7 @@ namespace {
 
 /// Splits surfaces into bone and other triangles by their cell label.
 void splitByLabel(vtkPolyData* surfaces, const std::vector<int>& boneLabels, vtkPolyData* bones, vtkPolyData* rest) {
-  vtkDataArray* labels = surfaces->GetCellData()->GetArray("Label");
+  vtkDataArray* labels = surfaces->GetCellData()->GetArray(repose::arrays::kLabel);
   auto boneCells = vtkSmartPointer<vtkCellArray>::New();
   auto otherCells = vtkSmartPointer<vtkCellArray>::New();
   auto ids = vtkSmartPointer<vtkIdList>::New();

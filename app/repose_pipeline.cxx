@@ -58,6 +58,7 @@
 #include "pose_quality.h"
 #include "label_table.h"
 #include "tet_mesh.h"
+#include "array_names.h"
 
 namespace repose {
 namespace {
@@ -214,12 +215,12 @@ vtkSmartPointer<vtkUnstructuredGrid> readCaseMesh(const std::string& path, const
     if (mesh->GetCellType(c) != VTK_TETRA)
       throw std::runtime_error(path + ": cell " + std::to_string(c) + " is not a tetrahedron");
   const vtkIdType nodes = mesh->GetNumberOfPoints();
-  vtkDataArray* weights = vtkDataArray::SafeDownCast(mesh->GetPointData()->GetAbstractArray("Weights"));
+  vtkDataArray* weights = vtkDataArray::SafeDownCast(mesh->GetPointData()->GetAbstractArray(repose::arrays::kWeights));
   const int influences = weights ? weights->GetNumberOfComponents() : 1;
-  requireValues(caseArray(mesh->GetPointData(), "Weights", influences, nodes, path), 0, -1, path);
+  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kWeights, influences, nodes, path), 0, -1, path);
   const double lastBone = double(skeleton.joints.size()) - 1;
-  requireValues(caseArray(mesh->GetPointData(), "BoneIds", influences, nodes, path), 0, lastBone, path);
-  requireValues(caseArray(mesh->GetPointData(), "FixedBone", 1, nodes, path), -1, lastBone, path);
+  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kBoneIds, influences, nodes, path), 0, lastBone, path);
+  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kFixedBone, 1, nodes, path), -1, lastBone, path);
   return mesh;
 }
 
@@ -227,10 +228,10 @@ vtkSmartPointer<vtkPolyData> readCaseSurfaces(const std::string& path, vtkIdType
   auto surfaces = vtkSmartPointer<vtkPolyData>::New();
   surfaces->ShallowCopy(readXmlMesh<vtkXMLPolyDataReader>(path));
   const vtkIdType n = surfaces->GetNumberOfPoints();
-  requireValues(caseArray(surfaces->GetPointData(), "BoundTet", 1, n, path), 0, double(tets) - 1, path);
-  requireValues(caseArray(surfaces->GetPointData(), "BoundWeights", 4, n, path), 0, -1, path);
-  if (!vtkIntArray::SafeDownCast(surfaces->GetPointData()->GetArray("BoundTet")) ||
-      !vtkFloatArray::SafeDownCast(surfaces->GetPointData()->GetArray("BoundWeights")))
+  requireValues(caseArray(surfaces->GetPointData(), repose::arrays::kBoundTet, 1, n, path), 0, double(tets) - 1, path);
+  requireValues(caseArray(surfaces->GetPointData(), repose::arrays::kBoundWeights, 4, n, path), 0, -1, path);
+  if (!vtkIntArray::SafeDownCast(surfaces->GetPointData()->GetArray(repose::arrays::kBoundTet)) ||
+      !vtkFloatArray::SafeDownCast(surfaces->GetPointData()->GetArray(repose::arrays::kBoundWeights)))
     throw std::runtime_error(path + ": BoundTet must be int32 and BoundWeights float32");
   return surfaces;
 }
@@ -273,7 +274,7 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
     // Float files holding whole numbers are common for label maps; anything else is not a label map.
     const vtkIdType n = scalars->GetNumberOfTuples();
     auto labels = vtkSmartPointer<vtkIntArray>::New();
-    labels->SetName("Labels");
+    labels->SetName(repose::arrays::kLabels);
     labels->SetNumberOfTuples(n);
     for (vtkIdType i = 0; i < n; ++i) {
       const double v = scalars->GetTuple1(i);
@@ -285,7 +286,7 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
     image->GetPointData()->SetScalars(labels);
   }
   vtkIntArray* labels = vtkIntArray::SafeDownCast(image->GetPointData()->GetScalars());
-  labels->SetName("Labels");
+  labels->SetName(repose::arrays::kLabels);
   // Tables indexed by label value are sized by the largest label: bound it before anyone allocates.
   bool any = false;
   for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n; ++i) {
@@ -470,7 +471,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   auto weightErrors = captureErrors(weights);
   weights->Update();
   vtkUnstructuredGrid* weighted = weights->GetOutput();
-  requireOutput(weighted && weighted->GetPointData()->GetArray("Weights"), "bone weights", weightErrors);
+  requireOutput(weighted && weighted->GetPointData()->GetArray(repose::arrays::kWeights), "bone weights", weightErrors);
   timed("weights", secondsSince(t0));
   {
     std::ostringstream m;
@@ -501,7 +502,7 @@ void Pipeline::prepare(vtkImageData* labels, const std::string& labelsName, cons
   binding->SetInputData(1, restMesh_);
   auto bindingErrors = captureErrors(binding);
   binding->Update();
-  requireOutput(binding->GetOutput()->GetPointData()->GetArray("BoundTet") != nullptr, "surface binding",
+  requireOutput(binding->GetOutput()->GetPointData()->GetArray(repose::arrays::kBoundTet) != nullptr, "surface binding",
                 bindingErrors);
   restSurfaces_ = vtkSmartPointer<vtkPolyData>::New();
   restSurfaces_->ShallowCopy(binding->GetOutput());
@@ -685,7 +686,7 @@ DeformationStats Pipeline::posedStats() {
   restMeshVolume();  // caches the connectivity
   if (tetLabels_.size() != std::size_t(tets_.rows())) {
     tetLabels_.assign(std::size_t(tets_.rows()), 0);
-    if (vtkDataArray* labels = restMesh_->GetCellData()->GetArray("Label"))
+    if (vtkDataArray* labels = restMesh_->GetCellData()->GetArray(repose::arrays::kLabel))
       for (vtkIdType c = 0; c < labels->GetNumberOfTuples() && c < tets_.rows(); ++c)
         tetLabels_[std::size_t(c)] = static_cast<std::int32_t>(labels->GetTuple1(c));
   }
@@ -788,35 +789,23 @@ void Pipeline::setRelaxation(bool enabled, double poisson, int outerIterations) 
   if (displacementResampler_) displacementResampler_->SetInputConnection(2, port);
 }
 
-namespace {
-// The number a word stands for among the choices of a setting; names the setting and the words otherwise.
-int choice(const std::string& word, std::initializer_list<std::pair<const char*, int>> choices, const char* setting) {
-  std::string expected;
-  for (const auto& [name, value] : choices) {
-    if (word == name) return value;
-    expected += (expected.empty() ? "" : ", ") + std::string(name);
-  }
-  throw std::runtime_error("unknown " + std::string(setting) + " '" + word + "' (expected " + expected + ")");
-}
-}  // namespace
-
-void Pipeline::setRelaxationModel(const std::string& model) {
-  relaxModel_ = choice(model, {{"fixed-corotated", 1}, {"fixed", 1}, {"linear", 0}}, "relaxation model");
+void Pipeline::setRelaxationModel(vtkReposeCorotationalRelax::ModelType model) {
+  relaxModel_ = model;
   if (relax_) relax_->SetModel(relaxModel_);
 }
 
-void Pipeline::setRelaxationVolume(const std::string& regions) {
-  relaxVolume_ = choice(regions, {{"tissues", 3}, {"segments", 2}, {"body", 1}, {"none", 0}}, "relaxation volume regions");
+void Pipeline::setRelaxationVolume(vtkReposeCorotationalRelax::VolumeRegionsType regions) {
+  relaxVolume_ = regions;
   if (relax_) relax_->SetVolumeRegions(relaxVolume_);
 }
 
-void Pipeline::setRelaxationContinuation(const std::string& mode) {
-  relaxContinuation_ = choice(mode, {{"if-inverted", 1}, {"never", 0}, {"always", 2}}, "relaxation continuation");
+void Pipeline::setRelaxationContinuation(vtkReposeCorotationalRelax::ContinuationType mode) {
+  relaxContinuation_ = mode;
   if (relax_) relax_->SetContinuation(relaxContinuation_);
 }
 
-void Pipeline::setRelaxationStrainedRegion(const std::string& mode) {
-  relaxStrainedRegionFirst_ = choice(mode, {{"first", 1}, {"off", 0}}, "relaxation strained region") != 0;
+void Pipeline::setRelaxationStrainedRegion(bool first) {
+  relaxStrainedRegionFirst_ = first;
   if (relax_) relax_->SetStrainedRegionThreshold(relaxStrainedRegionFirst_ ? relaxStrainedRegionThreshold_ : 0.0);
 }
 
@@ -839,7 +828,8 @@ std::string Pipeline::relaxationSummary() const {
     pinched << ", " << relax_->GetPinchedNodes() << " nodes pinched between bones (up to "
             << std::setprecision(2) << relax_->GetPinchedShortfall() << " mm short of room: no solve can unfold them)";
   m << "FEM relaxation: ";
-  if (relax_->GetModel() == 1) m << relax_->GetNewtonIterations() << " Newton iterations, ";
+  if (relax_->GetModel() == vtkReposeCorotationalRelax::MODEL_FIXED_COROTATED)
+    m << relax_->GetNewtonIterations() << " Newton iterations, ";
   m << relax_->GetCGIterations() << " CG iterations, relative residual "
     << relax_->GetRelativeResidual() << ", inverted tets " << relax_->GetInvertedBefore() << " -> "
     << relax_->GetInvertedAfter()

@@ -8,15 +8,16 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <vtkImageData.h>  // complete for the inline accessors below
+#include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+
+#include "vtkReposeCorotationalRelax.h"  // its enums name the relaxation settings
 
 class vtkAlgorithm;
 class vtkObject;
-class vtkImageData;
-class vtkPolyData;
-class vtkUnstructuredGrid;
 class vtkReposeBodyMesher;
-class vtkReposeCorotationalRelax;
 class vtkReposeBoneWeights;
 class vtkReposeSurfaceExtractor;
 class vtkReposeSurfaceBinding;
@@ -112,21 +113,20 @@ public:
   /// Corotational FEM relaxation of the skinned mesh (bone nodes stay rigid); everything posed
   /// downstream (surfaces, volumes) then follows the relaxed mesh.
   void setRelaxation(bool enabled, double poisson = 0.49, int outerIterations = 1);
-  /// "fixed-corotated" (default: nonlinear, keeps volume, untangles inverted tets) or "linear"
-  /// (one linearised corotational solve per outer iteration: faster, volume kept to first order).
-  void setRelaxationModel(const std::string& model);
-  /// Regions whose volume the fixed-corotated relaxation holds as a whole: "segments" (default, one
-  /// per bone's segment of the body), "tissues" (each label within each segment), "body" or "none"
+  /// Fixed-corotated (default: nonlinear, keeps volume, untangles inverted tets) or linear (one
+  /// linearised corotational solve per outer iteration: faster, volume kept to first order).
+  void setRelaxationModel(vtkReposeCorotationalRelax::ModelType model);
+  /// Regions whose volume the fixed-corotated relaxation holds as a whole: segments (default, one
+  /// per bone's segment of the body), tissues (each label within each segment), body or none
   /// (see vtkReposeCorotationalRelax::VolumeRegions).
-  void setRelaxationVolume(const std::string& regions);
-  /// When the fixed-corotated solve leaves tets inverted: "if-inverted" (default) solves again by the
-  /// fold-free continuation from the rest shape, "never" keeps the direct result, "always" uses the
+  void setRelaxationVolume(vtkReposeCorotationalRelax::VolumeRegionsType regions);
+  /// When the fixed-corotated solve leaves tets inverted: if-inverted (default) solves again by the
+  /// fold-free continuation from the rest shape, never keeps the direct result, always uses the
   /// continuation in every pose (see vtkReposeCorotationalRelax::Continuation).
-  void setRelaxationContinuation(const std::string& mode);
-  /// From a skinned start, relax the strained region (the joints) on its own before the whole mesh:
-  /// "first" (default) or "off" (the whole mesh from the start; see
-  /// vtkReposeCorotationalRelax::StrainedRegionThreshold).
-  void setRelaxationStrainedRegion(const std::string& mode);
+  void setRelaxationContinuation(vtkReposeCorotationalRelax::ContinuationType mode);
+  /// From a skinned start, relax the strained region (the joints) on its own before the whole mesh
+  /// (default), or the whole mesh from the start (see vtkReposeCorotationalRelax::StrainedRegionThreshold).
+  void setRelaxationStrainedRegion(bool first);
   /// Each relaxation starts from the last one's correction (for a sequence of poses; see
   /// vtkReposeCorotationalRelax::WarmStart). Kept per skinning method, so --compare's lbs+fem and
   /// dqs+fem each follow their own history.
@@ -192,9 +192,9 @@ private:
   vtkSmartPointer<vtkReposeCorotationalRelax> relax_;  // null when relaxation is off
   vtkSmartPointer<vtkReposeCorotationalRelax> relaxBySkinning_[2];  // per vtkReposeSkinning::SkinningMethod
   bool relaxWarmStart_ = false;
-  int relaxModel_ = 1;                                   // vtkReposeCorotationalRelax::Model
-  int relaxVolume_ = 2;
-  int relaxContinuation_ = 1;                            // vtkReposeCorotationalRelax::Continuation
+  int relaxModel_ = vtkReposeCorotationalRelax::MODEL_FIXED_COROTATED;
+  int relaxVolume_ = vtkReposeCorotationalRelax::VOLUME_SEGMENTS;
+  int relaxContinuation_ = vtkReposeCorotationalRelax::CONTINUATION_IF_INVERTED;
   bool relaxStrainedRegionFirst_ = true;
   double relaxStrainedRegionThreshold_ = 0.0;            // the filter's default, read when it is made
   vtkAlgorithm* posedSource() const;

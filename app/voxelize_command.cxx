@@ -23,6 +23,7 @@
 #include <vtkUnstructuredGrid.h>
 
 #include "atomic_outputs.h"
+#include "cli_options.h"
 #include "output_guard.h"
 #include "auto_rig.h"
 #include "label_table.h"
@@ -31,6 +32,7 @@
 #include "ReposeImageConversion.h"
 #include "repose_pipeline.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 namespace repose {
 
@@ -94,14 +96,14 @@ Args parse(int argc, char** argv, int first) {
       a.help = true;
       continue;
     }
-    if (arg.rfind("--", 0) != 0) throw VoxelizeUsageError("unexpected argument '" + arg + "'");
+    if (arg.rfind("--", 0) != 0) throw UsageError("unexpected argument '" + arg + "'");
     std::string name = arg.substr(2);
     if (flags.count(name)) {
       a.flags.insert(name);
       continue;
     }
-    if (!valued.count(name) && !repeatable.count(name)) throw VoxelizeUsageError("unknown option --" + name);
-    if (i + 1 >= argc) throw VoxelizeUsageError("option --" + name + " needs a value");
+    if (!valued.count(name) && !repeatable.count(name)) throw UsageError("unknown option --" + name);
+    if (i + 1 >= argc) throw UsageError("option --" + name + " needs a value");
     const std::string value = argv[++i];
     if (repeatable.count(name))
       a.repeated.emplace_back(name, value);
@@ -117,7 +119,7 @@ double number(const Args& a, const std::string& name, double fallback) {
   char* end = nullptr;
   const double x = std::strtod(it->second.c_str(), &end);
   if (it->second.empty() || *end != '\0' || !std::isfinite(x))
-    throw VoxelizeUsageError("--" + name + " needs a number, not '" + it->second + "'");
+    throw UsageError("--" + name + " needs a number, not '" + it->second + "'");
   return x;
 }
 
@@ -125,7 +127,7 @@ double number(const Args& a, const std::string& name, double fallback) {
 std::pair<std::string, std::string> nameAndFile(const std::string& option, const std::string& value) {
   const auto eq = value.find('=');
   if (eq == std::string::npos || eq == 0 || eq + 1 == value.size())
-    throw VoxelizeUsageError("--" + option + " needs NAME=MESH, not '" + value + "'");
+    throw UsageError("--" + option + " needs NAME=MESH, not '" + value + "'");
   return {value.substr(0, eq), value.substr(eq + 1)};
 }
 
@@ -150,7 +152,6 @@ TriangleMesh readTriangles(const std::string& path, double unitMm) {
   std::copy(tris.begin(), tris.end(), m.F.data());
   return m;
 }
-
 
 ImageGrid gridOf(vtkImageData* image) {
   ImageGrid g;
@@ -199,29 +200,29 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   if (a.help) return std::cout << kVoxelizeUsage, 0;
   auto require = [&](const std::string& n) {
     auto it = a.single.find(n);
-    if (it == a.single.end() || it->second.empty()) throw VoxelizeUsageError("missing required option --" + n);
+    if (it == a.single.end() || it->second.empty()) throw UsageError("missing required option --" + n);
     return it->second;
   };
   const std::string skinPath = require("skin");
   const std::string outPath = require("out");
   const std::string ext = imageExtension(outPath);
   if (ext != ".nii.gz" && ext != ".nii" && ext != ".nrrd" && ext != ".mha" && ext != ".mhd" && ext != ".nhdr")
-    throw VoxelizeUsageError("--out needs an image file name (.nii.gz, .nii, .nrrd, .mha), not '" + outPath + "'");
+    throw UsageError("--out needs an image file name (.nii.gz, .nii, .nrrd, .mha), not '" + outPath + "'");
   const bool hasReference = a.single.count("reference") != 0;
   refuseOutputsOverOwnInputs(a, outPath);
-  if (!hasReference && !a.single.count("voxel")) throw VoxelizeUsageError("missing required option --voxel (or --reference)");
+  if (!hasReference && !a.single.count("voxel")) throw UsageError("missing required option --voxel (or --reference)");
   const double unitMm = number(a, "unit-mm", 1.0);
-  if (!(unitMm > 0)) throw VoxelizeUsageError("--unit-mm must be positive");
+  if (!(unitMm > 0)) throw UsageError("--unit-mm must be positive");
   LabelVoxelizeOptions options;
   options.voxelMm = number(a, "voxel", 1.0);
   options.padVoxels = number(a, "padding", 2.0);
   const double maxVoxels = number(a, "max-voxels", double(options.maxVoxels));
-  if (!(options.voxelMm > 0)) throw VoxelizeUsageError("--voxel must be positive");
-  if (options.padVoxels < 0) throw VoxelizeUsageError("--padding must not be negative");
-  if (!(maxVoxels >= 1)) throw VoxelizeUsageError("--max-voxels must be at least 1");
+  if (!(options.voxelMm > 0)) throw UsageError("--voxel must be positive");
+  if (options.padVoxels < 0) throw UsageError("--padding must not be negative");
+  if (!(maxVoxels >= 1)) throw UsageError("--max-voxels must be at least 1");
   options.maxVoxels = std::size_t(maxVoxels);
   options.maxMarrowRadiusMm = number(a, "max-marrow-radius", kMaxMarrowRadiusMm);
-  if (!(options.maxMarrowRadiusMm >= 0)) throw VoxelizeUsageError("--max-marrow-radius must not be negative");
+  if (!(options.maxMarrowRadiusMm >= 0)) throw UsageError("--max-marrow-radius must not be negative");
   options.hollowBones = a.flags.count("hollow-bones") != 0;
   const double maxGap = number(a, "max-gap", 6.0);
   for (const auto& [opt, value] : a.repeated) nameAndFile(opt, value);  // usage errors before any reading
@@ -307,7 +308,7 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   const std::filesystem::path out(outPath);
   AtomicOutputs files(out.has_parent_path() ? out.parent_path().string() : ".");
   {
-    vtkSmartPointer<vtkImageData> image = repose_vtk::ToImage<vtkIntArray>(labels, "Labels");
+    vtkSmartPointer<vtkImageData> image = repose_vtk::ToImage<vtkIntArray>(labels, repose::arrays::kLabels);
     std::vector<std::int32_t>().swap(labels.data);  // the image holds the only copy while it is written
     writeLabelImage(image, files.stage(out.filename().string()));
   }

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "sparse_weights.h"
+#include "array_names.h"
 
 namespace repose_vtk
 {
@@ -21,15 +22,15 @@ namespace repose_vtk
 /// Whether the point data holds both weight arrays (their consistency is checked by ToSparseWeights).
 inline bool HasWeightArrays(vtkPointData* pd)
 {
-  return pd->GetArray("Weights") && pd->GetArray("BoneIds");
+  return pd->GetArray(repose::arrays::kWeights) && pd->GetArray(repose::arrays::kBoneIds);
 }
 
 /// Throws std::invalid_argument when the arrays are missing, disagree in size with each other or
 /// with np, or a bone id is not a bone index.
 inline repose::SparseWeights ToSparseWeights(vtkPointData* pd, vtkIdType np)
 {
-  vtkDataArray* w = pd->GetArray("Weights");
-  vtkDataArray* b = pd->GetArray("BoneIds");
+  vtkDataArray* w = pd->GetArray(repose::arrays::kWeights);
+  vtkDataArray* b = pd->GetArray(repose::arrays::kBoneIds);
   if (!w || !b)
     throw std::invalid_argument(
       "input lacks point data \"Weights\" and \"BoneIds\" (run vtkReposeBoneWeights first)");

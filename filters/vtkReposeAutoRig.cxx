@@ -15,6 +15,7 @@
 #include "auto_rig.h"
 #include "label_table.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <exception>
@@ -65,7 +66,7 @@ int vtkReposeAutoRig::RequestData(
 
     output->CopyStructure(input);
     vtkNew<vtkIntArray> values;
-    values->SetName(scalars->GetName() ? scalars->GetName() : "Labels");
+    values->SetName(scalars->GetName() ? scalars->GetName() : repose::arrays::kLabels);
     values->SetNumberOfTuples(static_cast<vtkIdType>(result.labels.data.size()));
     std::copy(result.labels.data.begin(), result.labels.data.end(), values->GetPointer(0));
     output->GetPointData()->SetScalars(values);

@@ -35,6 +35,7 @@
 #include "mesh_tagging.h"
 #include "skeleton.h"
 #include "tet_mesher.h"
+#include "array_names.h"
 
 vtkStandardNewMacro(vtkReposeBodyMesher);
 
@@ -354,12 +355,12 @@ int vtkReposeBodyMesher::RequestData(
     output->SetCells(VTK_TETRA, cells);
 
     vtkNew<vtkIntArray> fixedBone;
-    fixedBone->SetName("FixedBone");
+    fixedBone->SetName(repose::arrays::kFixedBone);
     fixedBone->SetNumberOfValues(nv);
     std::copy(mesh.fixedBone.begin(), mesh.fixedBone.end(), fixedBone->GetPointer(0));
     output->GetPointData()->AddArray(fixedBone);
     vtkNew<vtkIntArray> label;
-    label->SetName("Label");
+    label->SetName(repose::arrays::kLabel);
     label->SetNumberOfValues(nt);
     std::copy(mesh.tetLabel.begin(), mesh.tetLabel.end(), label->GetPointer(0));
     output->GetCellData()->AddArray(label);

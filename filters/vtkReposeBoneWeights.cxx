@@ -17,6 +17,7 @@
 
 #include "harmonic_weights.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <cmath>
@@ -52,7 +53,7 @@ repose::TetMesh ToTetMesh(vtkUnstructuredGrid* grid)
     for (int k = 0; k < 4; ++k)
       mesh.tets(c, k) = static_cast<int>(ids[k]);
   }
-  vtkDataArray* fixed = grid->GetPointData()->GetArray("FixedBone");
+  vtkDataArray* fixed = grid->GetPointData()->GetArray(repose::arrays::kFixedBone);
   if (!fixed || fixed->GetNumberOfComponents() != 1 || fixed->GetNumberOfTuples() != np)
     throw std::invalid_argument(
       "input has no 1-component point data \"FixedBone\" with a value per node (bone index, -1 for free nodes)");
@@ -109,12 +110,12 @@ int vtkReposeBoneWeights::RequestData(
     const int k = weights.k;
     const vtkIdType np = input->GetNumberOfPoints();
     vtkNew<vtkFloatArray> w;
-    w->SetName("Weights");
+    w->SetName(repose::arrays::kWeights);
     w->SetNumberOfComponents(k);
     w->SetNumberOfTuples(np);
     std::copy(weights.weight.begin(), weights.weight.end(), w->GetPointer(0));
     vtkNew<vtkUnsignedShortArray> b;
-    b->SetName("BoneIds");
+    b->SetName(repose::arrays::kBoneIds);
     b->SetNumberOfComponents(k);
     b->SetNumberOfTuples(np);
     std::copy(weights.bone.begin(), weights.bone.end(), b->GetPointer(0));

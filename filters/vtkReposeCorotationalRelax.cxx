@@ -22,6 +22,7 @@
 #include "corotational_fem.h"
 #include "progress_line.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 vtkStandardNewMacro(vtkReposeCorotationalRelax);
 
@@ -40,9 +41,48 @@ repose::Points ToPoints(vtkPoints* points)
 }
 }
 
+// The filter's enums are the core's, value for value: RequestData passes them on by a cast.
+namespace
+{
+constexpr bool SameValue(int filterValue, int coreValue)
+{
+  return filterValue == coreValue;
+}
+using Core = repose::CorotationalOptions;
+using Relax = vtkReposeCorotationalRelax;
+static_assert(SameValue(Relax::PRECONDITIONER_JACOBI, Core::Jacobi) &&
+  SameValue(Relax::PRECONDITIONER_INCOMPLETE_CHOLESKY, Core::IncompleteCholesky) &&
+  SameValue(Relax::PRECONDITIONER_CHOLMOD, Core::Cholmod) &&
+  SameValue(Relax::PRECONDITIONER_BLOCK_JACOBI, Core::BlockJacobi) &&
+  SameValue(Relax::PRECONDITIONER_TWO_LEVEL, Core::TwoLevel));
+static_assert(SameValue(Relax::MODEL_LINEAR, Core::Linear) &&
+  SameValue(Relax::MODEL_FIXED_COROTATED, Core::FixedCorotated));
+static_assert(SameValue(Relax::CONTINUATION_NEVER, Core::Never) &&
+  SameValue(Relax::CONTINUATION_IF_INVERTED, Core::IfInverted) &&
+  SameValue(Relax::CONTINUATION_ALWAYS, Core::Always));
+}
+
 vtkReposeCorotationalRelax::vtkReposeCorotationalRelax()
 {
   this->SetNumberOfInputPorts(2);
+  // One source of defaults: the core's.
+  const repose::CorotationalOptions defaults;
+  this->PoissonRatio = defaults.poisson;
+  this->OuterIterations = defaults.outerIterations;
+  this->Tolerance = defaults.tolerance;
+  this->MaxIterations = defaults.maxCgIterations;
+  this->Preconditioner = defaults.preconditioner;
+  this->Model = defaults.model;
+  this->MaxNewtonIterations = defaults.maxNewtonIterations;
+  this->StepTolerance = defaults.stepTolerance;
+  this->EnergyTolerance = defaults.energyTolerance;
+  this->RegionVolumeStiffness = defaults.regionVolumeStiffness;
+  this->RegionVolumeTolerance = defaults.regionVolumeTolerance;
+  this->InversionBarrier = defaults.inversionBarrier;
+  this->UntangleRelaxRings = defaults.untangleRelaxRings;
+  this->StrainedRegionThreshold = defaults.strainedRegionThreshold;
+  this->StrainedRegionRings = defaults.strainedRegionRings;
+  this->Continuation = defaults.continuation;
 }
 
 vtkReposeCorotationalRelax::~vtkReposeCorotationalRelax()
@@ -69,7 +109,7 @@ int vtkReposeCorotationalRelax::RequestData(
     vtkErrorMacro("needs the posed tet mesh (input 0) and the rest tet mesh (input 1)");
     return 0;
   }
-  vtkDataArray* fixed = rest->GetPointData()->GetArray("FixedBone");
+  vtkDataArray* fixed = rest->GetPointData()->GetArray(repose::arrays::kFixedBone);
   if (!fixed || rest->GetNumberOfPoints() != posed->GetNumberOfPoints() ||
     rest->GetNumberOfCells() != posed->GetNumberOfCells())
   {
@@ -107,13 +147,8 @@ int vtkReposeCorotationalRelax::RequestData(
     options.outerIterations = this->OuterIterations;
     options.tolerance = this->Tolerance;
     options.maxCgIterations = this->MaxIterations;
-    options.preconditioner = this->Preconditioner == 4 ? repose::CorotationalOptions::TwoLevel
-      : this->Preconditioner == 3                      ? repose::CorotationalOptions::BlockJacobi
-      : this->Preconditioner == 2                      ? repose::CorotationalOptions::Cholmod
-      : this->Preconditioner == 1                      ? repose::CorotationalOptions::IncompleteCholesky
-                                                       : repose::CorotationalOptions::Jacobi;
-    options.model = this->Model == 1 ? repose::CorotationalOptions::FixedCorotated
-                                     : repose::CorotationalOptions::Linear;
+    options.preconditioner = static_cast<repose::CorotationalOptions::Preconditioner>(this->Preconditioner);
+    options.model = static_cast<repose::CorotationalOptions::Model>(this->Model);
     options.maxNewtonIterations = this->MaxNewtonIterations;
     options.stepTolerance = this->StepTolerance;
     options.energyTolerance = this->EnergyTolerance;
@@ -123,9 +158,7 @@ int vtkReposeCorotationalRelax::RequestData(
     options.untangleRelaxRings = this->UntangleRelaxRings;
     options.strainedRegionThreshold = this->StrainedRegionThreshold;
     options.strainedRegionRings = this->StrainedRegionRings;
-    options.continuation = this->Continuation == 2 ? repose::CorotationalOptions::Always
-      : this->Continuation == 1                    ? repose::CorotationalOptions::IfInverted
-                                                   : repose::CorotationalOptions::Never;
+    options.continuation = static_cast<repose::CorotationalOptions::Continuation>(this->Continuation);
     if (this->SkeletonJSON && *this->SkeletonJSON)
     {
       for (const repose::Joint& joint : repose::parseSkeletonJson(this->SkeletonJSON).joints)
@@ -135,13 +168,13 @@ int vtkReposeCorotationalRelax::RequestData(
     }
     // Segments need the rest mesh's weights; without them the whole body is one region. The linear
     // model has no region terms: nothing is built for it.
-    const int volumeRegions = this->Model == 1 ? this->VolumeRegions : 0;
-    if (volumeRegions >= 2 && repose_vtk::HasWeightArrays(rest->GetPointData()))
+    const int volumeRegions = this->Model == MODEL_FIXED_COROTATED ? this->VolumeRegions : VOLUME_NONE;
+    if (volumeRegions >= VOLUME_SEGMENTS && repose_vtk::HasWeightArrays(rest->GetPointData()))
     {
       options.volumeRegions = repose::bodySegments(
         repose_vtk::ToSparseWeights(rest->GetPointData(), rest->GetNumberOfPoints()), tets);
-      vtkDataArray* labels = rest->GetCellData()->GetArray("Label");
-      if (volumeRegions == 3 && labels && labels->GetNumberOfTuples() == nt)
+      vtkDataArray* labels = rest->GetCellData()->GetArray(repose::arrays::kLabel);
+      if (volumeRegions == VOLUME_TISSUES && labels && labels->GetNumberOfTuples() == nt)
       {
         std::vector<int> tetLabels(static_cast<std::size_t>(nt));
         for (vtkIdType c = 0; c < nt; ++c)
@@ -153,12 +186,12 @@ int vtkReposeCorotationalRelax::RequestData(
         options.volumeRegions = repose::tissueSegments(options.volumeRegions, tetLabels);
       }
     }
-    else if (volumeRegions > 0)
+    else if (volumeRegions != VOLUME_NONE)
     {
       options.volumeRegions.assign(static_cast<std::size_t>(nt), 0);
     }
     const vtkMTimeType restTime = rest->GetMTime();
-    if (this->WarmStart && this->Model == 1 && this->LastRestMTime == restTime &&
+    if (this->WarmStart && this->Model == MODEL_FIXED_COROTATED && this->LastRestMTime == restTime &&
       this->LastCorrection.size() == 3 * static_cast<std::size_t>(nodes.rows()))
     {
       options.startCorrection =
@@ -286,13 +319,13 @@ void vtkReposeCorotationalRelax::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Tolerance: " << this->Tolerance << "\n";
   os << indent << "MaxIterations: " << this->MaxIterations << "\n";
   os << indent << "Preconditioner: "
-     << (this->Preconditioner == 4   ? "TwoLevel"
-         : this->Preconditioner == 3 ? "BlockJacobi"
-         : this->Preconditioner == 2 ? "CHOLMOD"
-         : this->Preconditioner == 1 ? "IncompleteCholesky"
-                                     : "Jacobi")
+     << (this->Preconditioner == PRECONDITIONER_TWO_LEVEL            ? "TwoLevel"
+         : this->Preconditioner == PRECONDITIONER_BLOCK_JACOBI        ? "BlockJacobi"
+         : this->Preconditioner == PRECONDITIONER_CHOLMOD             ? "CHOLMOD"
+         : this->Preconditioner == PRECONDITIONER_INCOMPLETE_CHOLESKY ? "IncompleteCholesky"
+                                                                      : "Jacobi")
      << "\n";
-  os << indent << "Model: " << (this->Model == 1 ? "FixedCorotated" : "Linear") << "\n";
+  os << indent << "Model: " << (this->Model == MODEL_FIXED_COROTATED ? "FixedCorotated" : "Linear") << "\n";
   os << indent << "MaxNewtonIterations: " << this->MaxNewtonIterations << "\n";
   os << indent << "UntangleRelaxRings: " << this->UntangleRelaxRings << "\n";
   os << indent << "StrainedRegionThreshold: " << this->StrainedRegionThreshold << "\n";

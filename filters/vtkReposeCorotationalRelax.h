@@ -1,10 +1,12 @@
 #ifndef vtkReposeCorotationalRelax_h
 #define vtkReposeCorotationalRelax_h
 // Refines a skinned tet mesh by a static elastic solve: bone nodes stay at their skinned (rigid)
-// positions, the soft tissue settles so that it keeps its volume. Model 1 (default): the nonlinear
-// fixed-corotated energy by projected Newton (removes skinning's inverted tets, keeps det F to
-// second order); model 0: linearized corotational elasticity (Mueller & Gross 2004). Input 0: the posed (skinned) mesh, the warm start; input 1: the rest mesh with point data
+// positions, the soft tissue settles so that it keeps its volume. MODEL_FIXED_COROTATED (default):
+// the nonlinear fixed-corotated energy by projected Newton (removes skinning's inverted tets, keeps
+// det F to second order); MODEL_LINEAR: linearized corotational elasticity (Mueller & Gross 2004).
+// Input 0: the posed (skinned) mesh, the warm start; input 1: the rest mesh with point data
 // "FixedBone" (the stress-free shape and the Dirichlet nodes). Output: input 0 with relaxed points.
+// The defaults are the core's (repose::CorotationalOptions), but for VolumeRegions, the filter's own.
 
 #include "ReposeFiltersModule.h"
 #include "vtkUnstructuredGridAlgorithm.h"
@@ -30,51 +32,82 @@ public:
   vtkGetMacro(Tolerance, double);
   vtkSetClampMacro(MaxIterations, int, 1, 1000000);
   vtkGetMacro(MaxIterations, int);
-  /// 0 = Jacobi-PCG (Eigen), 1 = incomplete-Cholesky PCG, 2 = CHOLMOD direct solve,
-  /// 3 = block-Jacobi PCG on float 3x3 blocks, 4 = the same PCG with a two-level preconditioner
-  /// (block Jacobi plus rigid-body modes of node aggregates; default).
-  vtkSetClampMacro(Preconditioner, int, 0, 4);
+  /// The linear solver (repose::CorotationalOptions::Preconditioner, same values): Jacobi-PCG (Eigen),
+  /// incomplete-Cholesky PCG, CHOLMOD direct solve, block-Jacobi PCG on float 3x3 blocks, or the same
+  /// PCG with a two-level preconditioner (block Jacobi plus rigid-body modes of node aggregates; default).
+  enum PreconditionerType
+  {
+    PRECONDITIONER_JACOBI = 0,
+    PRECONDITIONER_INCOMPLETE_CHOLESKY = 1,
+    PRECONDITIONER_CHOLMOD = 2,
+    PRECONDITIONER_BLOCK_JACOBI = 3,
+    PRECONDITIONER_TWO_LEVEL = 4
+  };
+  vtkSetClampMacro(Preconditioner, int, PRECONDITIONER_JACOBI, PRECONDITIONER_TWO_LEVEL);
   vtkGetMacro(Preconditioner, int);
-  /// 0 = linear corotational, 1 = fixed-corotated (nonlinear, default).
-  vtkSetClampMacro(Model, int, 0, 1);
+  void SetPreconditionerToJacobi() { this->SetPreconditioner(PRECONDITIONER_JACOBI); }
+  void SetPreconditionerToIncompleteCholesky() { this->SetPreconditioner(PRECONDITIONER_INCOMPLETE_CHOLESKY); }
+  void SetPreconditionerToCholmod() { this->SetPreconditioner(PRECONDITIONER_CHOLMOD); }
+  void SetPreconditionerToBlockJacobi() { this->SetPreconditioner(PRECONDITIONER_BLOCK_JACOBI); }
+  void SetPreconditionerToTwoLevel() { this->SetPreconditioner(PRECONDITIONER_TWO_LEVEL); }
+  /// Linear corotational, or fixed-corotated (nonlinear, default; repose::CorotationalOptions::Model).
+  enum ModelType
+  {
+    MODEL_LINEAR = 0,
+    MODEL_FIXED_COROTATED = 1
+  };
+  vtkSetClampMacro(Model, int, MODEL_LINEAR, MODEL_FIXED_COROTATED);
   vtkGetMacro(Model, int);
-  /// Model 1: at most this many Newton iterations (default 60), stopping once no node moves more
+  void SetModelToLinear() { this->SetModel(MODEL_LINEAR); }
+  void SetModelToFixedCorotated() { this->SetModel(MODEL_FIXED_COROTATED); }
+  /// Fixed-corotated model: at most this many Newton iterations (default 60), stopping once no node moves more
   /// than StepTolerance times the mean rest edge length in an iteration (default 0.01).
   vtkSetClampMacro(MaxNewtonIterations, int, 1, 10000);
   vtkGetMacro(MaxNewtonIterations, int);
   vtkSetClampMacro(StepTolerance, double, 1e-12, 1.0);
   vtkGetMacro(StepTolerance, double);
-  /// Model 1: also stops when an iteration lowers the energy by less than this fraction (default 1e-3).
+  /// Fixed-corotated model: also stops when an iteration lowers the energy by less than this fraction (default 1e-3).
   vtkSetClampMacro(EnergyTolerance, double, 0.0, 1.0);
   vtkGetMacro(EnergyTolerance, double);
-  /// Model 1: regions whose volume is held as a whole (see repose::CorotationalOptions::volumeRegions),
-  /// against the volumetric locking of linear tets. 0: none (the paper's solve); 1: the whole body;
-  /// 2 (default): body segments, each tet in the segment of the bone with the largest summed weight
-  /// over its nodes (needs the rest mesh's Weights and BoneIds; falls back to 1 without them);
-  /// 3: segments split by the tets' cell data Label, so each organ keeps its own volume within its
-  /// segment (falls back to 2 without Label). Slower, and the fold-free continuation can stall with
-  /// it (tiny phantom's test pose: 170 steps, not kept, where segments complete in 29).
-  vtkSetClampMacro(VolumeRegions, int, 0, 3);
+  /// Fixed-corotated model: regions whose volume is held as a whole (see
+  /// repose::CorotationalOptions::volumeRegions), against the volumetric locking of linear tets.
+  /// NONE: the paper's solve; BODY: the whole body; SEGMENTS (default): body segments, each tet in the
+  /// segment of the bone with the largest summed weight over its nodes (needs the rest mesh's Weights
+  /// and BoneIds; falls back to BODY without them); TISSUES: segments split by the tets' cell data
+  /// Label, so each organ keeps its own volume within its segment (falls back to SEGMENTS without
+  /// Label). Slower, and the fold-free continuation can stall with it.
+  enum VolumeRegionsType
+  {
+    VOLUME_NONE = 0,
+    VOLUME_BODY = 1,
+    VOLUME_SEGMENTS = 2,
+    VOLUME_TISSUES = 3
+  };
+  vtkSetClampMacro(VolumeRegions, int, VOLUME_NONE, VOLUME_TISSUES);
   vtkGetMacro(VolumeRegions, int);
-  /// Model 1: a region's volume stiffness, in units of the tissue's Lame lambda.
+  void SetVolumeRegionsToNone() { this->SetVolumeRegions(VOLUME_NONE); }
+  void SetVolumeRegionsToBody() { this->SetVolumeRegions(VOLUME_BODY); }
+  void SetVolumeRegionsToSegments() { this->SetVolumeRegions(VOLUME_SEGMENTS); }
+  void SetVolumeRegionsToTissues() { this->SetVolumeRegions(VOLUME_TISSUES); }
+  /// Fixed-corotated model: a region's volume stiffness, in units of the tissue's Lame lambda.
   vtkSetClampMacro(RegionVolumeStiffness, double, 0.0, 1e6);
   vtkGetMacro(RegionVolumeStiffness, double);
-  /// Model 1: each region's volume is then held to this relative tolerance by up to 4 multiplier
+  /// Fixed-corotated model: each region's volume is then held to this relative tolerance by up to 4 multiplier
   /// updates (see repose::CorotationalOptions::regionVolumeTolerance); 1 or more: the penalty alone.
   vtkSetClampMacro(RegionVolumeTolerance, double, 0.0, 1.0);
   vtkGetMacro(RegionVolumeTolerance, double);
-  /// Model 1: the log barrier that keeps the tets positive when Newton starts from folding (default
+  /// Fixed-corotated model: the log barrier that keeps the tets positive when Newton starts from folding (default
   /// on; see repose::CorotationalOptions::inversionBarrier). Off: only the finite penalty, about
   /// twice as fast on the medium phantom, but Newton may stall short of the minimum.
   vtkSetMacro(InversionBarrier, bool);
   vtkGetMacro(InversionBarrier, bool);
   vtkBooleanMacro(InversionBarrier, bool);
-  /// Model 1: after an untangling round, the moved nodes and this many rings of neighbours are
+  /// Fixed-corotated model: after an untangling round, the moved nodes and this many rings of neighbours are
   /// relaxed on their own, then the whole mesh once (default 2; see
   /// repose::CorotationalOptions::untangleRelaxRings). -1: the whole mesh after every round.
   vtkSetClampMacro(UntangleRelaxRings, int, -1, 1000);
   vtkGetMacro(UntangleRelaxRings, int);
-  /// Model 1, from a cold start: the tets strained by skinning above this threshold (strain energy
+  /// Fixed-corotated model, from a cold start: the tets strained by skinning above this threshold (strain energy
   /// density over the shear modulus), their free nodes and StrainedRegionRings rings of neighbours
   /// are relaxed on their own before the whole mesh (default 1e-4, rings 3; see
   /// repose::CorotationalOptions::strainedRegionThreshold). 0: the whole mesh at once.
@@ -82,17 +115,26 @@ public:
   vtkGetMacro(StrainedRegionThreshold, double);
   vtkSetClampMacro(StrainedRegionRings, int, 0, 1000);
   vtkGetMacro(StrainedRegionRings, int);
-  /// Model 1 with the barrier: when the solve leaves a fold (inverted tets with a free node), solve
-  /// again by a fold-free continuation from the rest shape (see
-  /// repose::CorotationalOptions::continuation). 0: never, 1: if tets stay inverted and no node is
-  /// pinched between bones (default; see GetPinchedNodes), 2: always.
-  vtkSetClampMacro(Continuation, int, 0, 2);
+  /// Fixed-corotated model with the barrier: when the solve leaves a fold (inverted tets with a free
+  /// node), solve again by a fold-free continuation from the rest shape (see
+  /// repose::CorotationalOptions::continuation, same values): never, if tets stay inverted and no node
+  /// is pinched between bones (default; see GetPinchedNodes), or always.
+  enum ContinuationType
+  {
+    CONTINUATION_NEVER = 0,
+    CONTINUATION_IF_INVERTED = 1,
+    CONTINUATION_ALWAYS = 2
+  };
+  vtkSetClampMacro(Continuation, int, CONTINUATION_NEVER, CONTINUATION_ALWAYS);
   vtkGetMacro(Continuation, int);
+  void SetContinuationToNever() { this->SetContinuation(CONTINUATION_NEVER); }
+  void SetContinuationToIfInverted() { this->SetContinuation(CONTINUATION_IF_INVERTED); }
+  void SetContinuationToAlways() { this->SetContinuation(CONTINUATION_ALWAYS); }
   /// Optional: the skeleton (as for vtkReposeSkinning), whose hierarchy the continuation's bone
   /// paths follow so that joints stay together along them. Without it each bone moves on its own.
   vtkSetStringMacro(SkeletonJSON);
   vtkGetStringMacro(SkeletonJSON);
-  /// Model 1: start from the last execution's correction, the input plus (last output - last input)
+  /// Fixed-corotated model: start from the last execution's correction, the input plus (last output - last input)
   /// on the free nodes, when the rest mesh is the same and that start has no more inverted tets
   /// than the input (see repose::CorotationalOptions::startCorrection). For animation frames and
   /// drags: a few Newton steps from next to the minimum, and consecutive results stay coherent.
@@ -106,7 +148,7 @@ public:
 
   /// Figures of the last execution.
   vtkGetMacro(CGIterations, int);          ///< summed over outer (or Newton) iterations
-  vtkGetMacro(NewtonIterations, int);      ///< model 1; 0 for model 0
+  vtkGetMacro(NewtonIterations, int);      ///< fixed-corotated model; 0 for linear
   vtkGetMacro(RelativeResidual, double);   ///< of the last outer iteration
   vtkGetMacro(InvertedBefore, int);
   vtkGetMacro(InvertedAfter, int);
@@ -165,27 +207,28 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  double PoissonRatio = 0.49;
-  int OuterIterations = 1;
-  double Tolerance = 1e-6;
-  int MaxIterations = 2000;
-  int Preconditioner = 4;
-  int Model = 1;
-  int MaxNewtonIterations = 60;
-  double StepTolerance = 0.01;
-  double EnergyTolerance = 1e-3;
-  int VolumeRegions = 2;
-  double RegionVolumeStiffness = 30.0;
-  double RegionVolumeTolerance = 1e-5;
+  // The solver's options: the constructor gives them the core's defaults.
+  double PoissonRatio;
+  int OuterIterations;
+  double Tolerance;
+  int MaxIterations;
+  int Preconditioner;
+  int Model;
+  int MaxNewtonIterations;
+  double StepTolerance;
+  double EnergyTolerance;
+  int VolumeRegions = VOLUME_SEGMENTS;
+  double RegionVolumeStiffness;
+  double RegionVolumeTolerance;
   int RegionVolumeUpdates = 0;
-  bool InversionBarrier = true;
-  int UntangleRelaxRings = 2;
-  double StrainedRegionThreshold = 1e-4;
-  int StrainedRegionRings = 3;
+  bool InversionBarrier;
+  int UntangleRelaxRings;
+  double StrainedRegionThreshold;
+  int StrainedRegionRings;
   int StrainedRegionNodes = 0;
   int StrainedRegionNewtonIterations = 0;
   double LastStrainedRegionTime = 0.0;
-  int Continuation = 1;
+  int Continuation;
   char* SkeletonJSON = nullptr;
   bool WarmStart = false;
   bool WarmStarted = false;

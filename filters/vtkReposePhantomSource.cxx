@@ -12,6 +12,7 @@
 #include "ReposeImageConversion.h"
 #include "phantom.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <exception>
@@ -157,7 +158,7 @@ int vtkReposePhantomSource::RequestData(
       grid.direction(1, 0), grid.direction(1, 1), grid.direction(1, 2), grid.direction(2, 0),
       grid.direction(2, 1), grid.direction(2, 2));
     vtkNew<vtkIntArray> labels;
-    labels->SetName("Labels");
+    labels->SetName(repose::arrays::kLabels);
     labels->SetNumberOfTuples(static_cast<vtkIdType>(ph.labels.data.size()));
     std::copy(ph.labels.data.begin(), ph.labels.data.end(), labels->GetPointer(0));
     output->GetPointData()->SetScalars(labels);

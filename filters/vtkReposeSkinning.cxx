@@ -18,6 +18,7 @@
 #include "pose.h"
 #include "skeleton.h"
 #include "skinning.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <chrono>
@@ -57,7 +58,7 @@ struct vtkReposeSkinning::Internals
     vtkPointData* pd = input->GetPointData();
     Weights = repose_vtk::ToSparseWeights(pd, np);
     FixedBone.clear();
-    if (vtkDataArray* f = pd->GetArray("FixedBone"))
+    if (vtkDataArray* f = pd->GetArray(repose::arrays::kFixedBone))
     {
       if (f->GetNumberOfComponents() != 1 || f->GetNumberOfTuples() != np)
         throw std::invalid_argument("point data \"FixedBone\" must have 1 component per node");

@@ -13,6 +13,7 @@
 #include "vtkUnstructuredGrid.h"
 
 #include "barycentric_binding.h"
+#include "array_names.h"
 
 #include <stdexcept>
 #include <string>
@@ -87,11 +88,11 @@ int vtkReposeSurfaceBinding::RequestData(
     const repose::Binding binding = repose::bindPoints(nodes, tets, points);
     const vtkIdType n = static_cast<vtkIdType>(binding.tet.size());
     auto tetArray = vtkSmartPointer<vtkIntArray>::New();
-    tetArray->SetName("BoundTet");
+    tetArray->SetName(repose::arrays::kBoundTet);
     tetArray->SetNumberOfTuples(n);
     std::copy(binding.tet.begin(), binding.tet.end(), tetArray->GetPointer(0));
     auto weights = vtkSmartPointer<vtkFloatArray>::New();
-    weights->SetName("BoundWeights");
+    weights->SetName(repose::arrays::kBoundWeights);
     weights->SetNumberOfComponents(4);
     weights->SetNumberOfTuples(n);
     std::copy(binding.bary.data(), binding.bary.data() + 4 * n, weights->GetPointer(0));

@@ -16,6 +16,7 @@
 #include "vtkUnstructuredGrid.h"
 
 #include "barycentric_binding.h"
+#include "array_names.h"
 
 #include <chrono>
 #include <stdexcept>
@@ -70,8 +71,9 @@ int vtkReposeSurfaceDeformer::RequestData(
   Internals& in = *this->Impl;
   try
   {
-    vtkIntArray* tetArray = vtkIntArray::SafeDownCast(surface->GetPointData()->GetArray("BoundTet"));
-    vtkFloatArray* weights = vtkFloatArray::SafeDownCast(surface->GetPointData()->GetArray("BoundWeights"));
+    vtkIntArray* tetArray = vtkIntArray::SafeDownCast(surface->GetPointData()->GetArray(repose::arrays::kBoundTet));
+    vtkFloatArray* weights =
+      vtkFloatArray::SafeDownCast(surface->GetPointData()->GetArray(repose::arrays::kBoundWeights));
     if (!tetArray || !weights || weights->GetNumberOfComponents() != 4)
     {
       throw std::invalid_argument(

@@ -38,6 +38,7 @@
 #include "body_mask.h"
 #include "image_grid.h"
 #include "skeleton.h"
+#include "array_names.h"
 
 vtkStandardNewMacro(vtkReposeSurfaceExtractor);
 
@@ -47,7 +48,7 @@ namespace
 void SetCellLabel(vtkPolyData* surface, int label)
 {
   vtkNew<vtkIntArray> labels;
-  labels->SetName("Label");
+  labels->SetName(repose::arrays::kLabel);
   labels->SetNumberOfTuples(surface->GetNumberOfCells());
   labels->FillValue(label);
   surface->GetCellData()->AddArray(labels);

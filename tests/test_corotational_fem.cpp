@@ -92,6 +92,7 @@ TEST(CorotationalFem, SingleTetUnderPureRotationHasNoElasticForce) {
   const Points rotated = transform(rest, R, t);
   std::vector<int> fixed = {0, 0, 0, -1};
   CorotationalOptions opt;
+  opt.model = CorotationalOptions::Linear;
   opt.poisson = 0.3;
   opt.tolerance = 1e-14;
 
@@ -130,6 +131,7 @@ TEST(CorotationalFem, BarStretchedByItsEndsHasUniformStrain) {
   for (auto pre : {CorotationalOptions::Jacobi, CorotationalOptions::IncompleteCholesky, CorotationalOptions::Cholmod,
                    CorotationalOptions::BlockJacobi, CorotationalOptions::TwoLevel}) {
     CorotationalOptions opt;
+    opt.model = CorotationalOptions::Linear;
     opt.poisson = 0.0;  // no lateral contraction: u = (strain x, 0, 0) is the exact solution
     opt.tolerance = 1e-13;
     opt.preconditioner = pre;
@@ -165,6 +167,7 @@ TEST(CorotationalFem, InvariantToRigidMotionOfTheWholeProblem) {
       posed.row(b.id(b.nx - 1, j, k)) = (bend * b.nodes.row(b.id(b.nx - 1, j, k)).transpose()).transpose();
     }
   CorotationalOptions opt;
+  opt.model = CorotationalOptions::Linear;
   opt.tolerance = 1e-13;
   opt.maxCgIterations = 10000;
   opt.outerIterations = 3;
@@ -197,6 +200,7 @@ double squeezedVolumeRatio(double poisson, CorotationalReport* rep) {
     }
   for (Eigen::Index i = 0; i < posed.rows(); ++i) posed(i, 2) *= 0.9;  // warm start: uniform squeeze
   CorotationalOptions opt;
+  opt.model = CorotationalOptions::Linear;
   opt.poisson = poisson;
   opt.tolerance = 1e-10;
   opt.maxCgIterations = 20000;
@@ -228,6 +232,7 @@ TEST(CorotationalFem, InvertedSkinnedTetsAreUninverted) {
   posed.row(b.id(1, 1, 1)) += Eigen::RowVector3d(1.6, 1.3, 1.5);  // past its neighbours
   for (auto pre : {CorotationalOptions::Jacobi, CorotationalOptions::IncompleteCholesky}) {
     CorotationalOptions opt;
+    opt.model = CorotationalOptions::Linear;
     opt.preconditioner = pre;
     // The default single outer iteration already un-inverts; more converge to the rest shape.
     Points x = posed;
@@ -811,6 +816,7 @@ TEST(FixedCorotatedFem, CancelStopsTheSolveAndLeavesPosedAsItCameIn) {
   }
   // The linear model asks too.
   CorotationalOptions linear;
+  linear.model = CorotationalOptions::Linear;
   linear.checkpoint = [](const repose::RelaxationProgress& p) { return p.phase == repose::RelaxationProgress::Linear; };
   Points y = f.blended;
   EXPECT_THROW(repose::relaxCorotational(f.b.nodes, f.b.tets, f.fixed, y, linear, nullptr), repose::RelaxationCancelled);
@@ -1073,6 +1079,7 @@ TEST(CorotationalFem, DISABLED_BenchmarkBentBox) {
   const double restVolume = repose::meshVolume(b.nodes, b.tets);
   for (auto pre : {CorotationalOptions::Jacobi, CorotationalOptions::IncompleteCholesky}) {
     CorotationalOptions opt;
+    opt.model = CorotationalOptions::Linear;
     opt.preconditioner = pre;
     opt.maxCgIterations = 5000;
     Points x = posed;

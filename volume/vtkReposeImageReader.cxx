@@ -22,6 +22,7 @@
 
 #include "ReposeDicomSeries.h"
 #include "image_file_integrity.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <cmath>
@@ -199,7 +200,7 @@ vtkSmartPointer<vtkDataArray> ReadPixels(const char* fileName, Header& h)
   auto* image = reader->GetOutput();
   const std::size_t n = image->GetLargestPossibleRegion().GetNumberOfPixels();
   auto array = vtkSmartPointer<ArrayT>::New();
-  array->SetName("ImageScalars");
+  array->SetName(repose::arrays::kImageScalars);
   array->SetNumberOfTuples(static_cast<vtkIdType>(n));
   std::copy(image->GetBufferPointer(), image->GetBufferPointer() + n, array->GetPointer(0));
   return array;
@@ -215,7 +216,7 @@ vtkSmartPointer<vtkDataArray> ReadWideIntegers(const char* fileName, Header& h)
   const std::size_t n = image->GetLargestPossibleRegion().GetNumberOfPixels();
   const double* values = image->GetBufferPointer();
   auto array = vtkSmartPointer<vtkIntArray>::New();
-  array->SetName("ImageScalars");
+  array->SetName(repose::arrays::kImageScalars);
   array->SetNumberOfTuples(static_cast<vtkIdType>(n));
   for (std::size_t i = 0; i < n; ++i)
   {

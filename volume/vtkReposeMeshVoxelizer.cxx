@@ -16,6 +16,7 @@
 
 #include "label_table.h"
 #include "mesh_voxelizer.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <exception>
@@ -257,7 +258,7 @@ int vtkReposeMeshVoxelizer::RequestData(
     }
     output->SetDirectionMatrix(d);
     vtkNew<vtkIntArray> values;
-    values->SetName("Labels");
+    values->SetName(repose::arrays::kLabels);
     values->SetNumberOfTuples(static_cast<vtkIdType>(result.labels.data.size()));
     std::copy(result.labels.data.begin(), result.labels.data.end(), values->GetPointer(0));
     output->GetPointData()->SetScalars(values);

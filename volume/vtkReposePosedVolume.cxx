@@ -19,6 +19,7 @@
 #include "resample_pull.h"
 #include "rigid_bone_overlay.h"
 #include "tet_boundary.h"
+#include "array_names.h"
 
 #include <algorithm>
 #include <array>
@@ -446,7 +447,7 @@ int vtkReposePosedVolume::RequestData(
         static_cast<std::int32_t>(this->BackgroundValue), &report);
       this->RigidBoneVoxels = 0;
       this->ContestedBoneVoxels = 0;
-      vtkDataArray* fixed = restMesh->GetPointData()->GetArray("FixedBone");
+      vtkDataArray* fixed = restMesh->GetPointData()->GetArray(repose::arrays::kFixedBone);
       if (this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints())
       {
         // Pose-independent inputs of the overlay are converted once.
@@ -484,9 +485,9 @@ int vtkReposePosedVolume::RequestData(
         array->GetPointer(0), static_cast<float>(this->BackgroundValue), &report);
       outScalars = array;
     }
-    outScalars->SetName(this->OutputDisplacement ? "Displacement"
+    outScalars->SetName(this->OutputDisplacement ? repose::arrays::kDisplacement
         : scalars->GetName()                       ? scalars->GetName()
-                                                   : "ImageScalars");
+                                                   : repose::arrays::kImageScalars);
     outScalars->Modified();
     // The full grid's origin: the sub-extent's voxels keep their indices.
     output->Initialize();

@@ -13,6 +13,7 @@
 #include <vtkPolyData.h>
 
 #include "label_colors.h"
+#include "array_names.h"
 
 namespace repose {
 
@@ -39,7 +40,7 @@ void LabelLegend::clear() { list_->clear(); }
 
 void LabelLegend::setCase(vtkPolyData* surfaces, const LabelTable& table, const Skeleton& skeleton) {
   list_->clear();
-  vtkDataArray* labels = surfaces ? surfaces->GetCellData()->GetArray("Label") : nullptr;
+  vtkDataArray* labels = surfaces ? surfaces->GetCellData()->GetArray(repose::arrays::kLabel) : nullptr;
   if (!labels) return;
   std::set<int> values;
   for (vtkIdType c = 0; c < labels->GetNumberOfTuples(); ++c) values.insert(int(labels->GetTuple1(c)));

@@ -34,6 +34,7 @@
 
 #include "label_colors.h"
 #include "surface_lod.h"
+#include "array_names.h"
 
 namespace repose {
 
@@ -234,7 +235,7 @@ void SceneView::setCase(vtkPolyData* rest, const Skeleton& skeleton, const Label
   d_->hasRootPosition = false;
   d_->caption->SetInput("");
   d_->global.assign(skeleton.size(), Eigen::Isometry3d::Identity());
-  vtkDataArray* labels = rest->GetCellData()->GetArray("Label");
+  vtkDataArray* labels = rest->GetCellData()->GetArray(repose::arrays::kLabel);
   if (!labels) throw std::runtime_error("the case's surfaces have no cell data 'Label'");
   double range[2];
   labels->GetRange(range, 0);
@@ -245,7 +246,7 @@ void SceneView::setCase(vtkPolyData* rest, const Skeleton& skeleton, const Label
   auto skinCells = vtkSmartPointer<vtkCellArray>::New();
   auto tissueCells = vtkSmartPointer<vtkCellArray>::New();
   auto tissueLabels = vtkSmartPointer<vtkIntArray>::New();
-  tissueLabels->SetName("Label");
+  tissueLabels->SetName(repose::arrays::kLabel);
   auto ids = vtkSmartPointer<vtkIdList>::New();
   vtkCellArray* polys = rest->GetPolys();
   const vtkIdType firstPoly = rest->GetNumberOfVerts() + rest->GetNumberOfLines();
@@ -475,7 +476,7 @@ int SceneView::pickJoint(int x, int y) {
   }
   const vtkIdType cell = d_->picker->GetCellId();
   vtkDataSet* picked = d_->picker->GetDataSet();
-  vtkDataArray* labels = picked ? picked->GetCellData()->GetArray("Label") : nullptr;
+  vtkDataArray* labels = picked ? picked->GetCellData()->GetArray(repose::arrays::kLabel) : nullptr;
   if (cell < 0 || !labels || cell >= labels->GetNumberOfTuples()) return -1;
   const int label = int(labels->GetTuple1(cell));
   const int joint = jointOfLabel(label);

@@ -11,6 +11,8 @@ namespace repose {
 
 struct RelaxationProgress;
 
+/// The defaults are those of vtkReposeCorotationalRelax (its constructor reads them from here), the
+/// solve every user of the CLI, the GUI and the Python filters gets.
 struct CorotationalOptions {
   /// Poisson's ratio, in (-1, 0.5). Near 0.5 the tissue is nearly incompressible (and CG slower).
   double poisson = 0.49;
@@ -61,17 +63,17 @@ struct CorotationalOptions {
   /// accepts a step only if it lowers the energy and does not increase the number of inverted tets
   /// (starting from 9/10 of the way to where the first tet would turn flat, tet_turning_point.h).
   enum Model { Linear, FixedCorotated };
-  Model model = Linear;
+  Model model = FixedCorotated;
   /// FixedCorotated: at most this many Gauss-Newton iterations.
   int maxNewtonIterations = 60;
   /// FixedCorotated: stops when the largest node move of a step is below stepTolerance times the
   /// mean rest edge length (then det F is settled to about that relative accuracy).
-  double stepTolerance = 1e-3;
+  double stepTolerance = 0.01;
   /// FixedCorotated: also stops when an iteration lowers the energy by less than this fraction
   /// (after the continuation's path has switched to volumeRegions, only with a move below 10
   /// stepTolerance edge lengths too: the new region terms start far from their targets but are a
   /// tiny part of the energy, and Newton stopped with tissue regions 6e-3 off, where 5e-5 is reached).
-  double energyTolerance = 1e-6;
+  double energyTolerance = 1e-3;
   /// FixedCorotated: a penalty inversionPenalty * lambda * (inversionThreshold - det F)^2 is added
   /// to each tet's energy density below det F = inversionThreshold. The fixed-corotated energy is
   /// finite through det F = 0, so without it a fold can be a minimum (where skinning drives tissue

@@ -15,10 +15,15 @@ from repose import (vtkReposeCorotationalRelax, vtkReposeImageReader, vtkReposeI
 
 from .checked_files import WriteFailure, check_written, failure_reason, write_text
 
-# Settings words -> the relaxation filter's numbers (as Pipeline::setRelaxation* maps them).
-RELAX_MODEL = {"fixed-corotated": 1, "linear": 0}
-RELAX_VOLUME = {"tissues": 3, "segments": 2, "body": 1, "none": 0}
-RELAX_CONTINUATION = {"if-inverted": 1, "never": 0, "always": 2}
+# Settings words -> the relaxation filter's enums (the words of repose pose --relax-*).
+RELAX_MODEL = {"fixed-corotated": vtkReposeCorotationalRelax.MODEL_FIXED_COROTATED,
+               "linear": vtkReposeCorotationalRelax.MODEL_LINEAR}
+RELAX_VOLUME = {"tissues": vtkReposeCorotationalRelax.VOLUME_TISSUES,
+                "segments": vtkReposeCorotationalRelax.VOLUME_SEGMENTS,
+                "body": vtkReposeCorotationalRelax.VOLUME_BODY, "none": vtkReposeCorotationalRelax.VOLUME_NONE}
+RELAX_CONTINUATION = {"if-inverted": vtkReposeCorotationalRelax.CONTINUATION_IF_INVERTED,
+                      "never": vtkReposeCorotationalRelax.CONTINUATION_NEVER,
+                      "always": vtkReposeCorotationalRelax.CONTINUATION_ALWAYS}
 IMAGE_EXTENSIONS = (".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd")
 
 

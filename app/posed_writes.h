@@ -1,0 +1,18 @@
+#pragma once
+// The posed outputs of a pipeline staged into a command's output directory.
+#include <string>
+
+namespace repose {
+
+class AtomicOutputs;
+class Pipeline;
+
+/// The case's label table beside a label output: BASE.tsv (Repose's, with kinds) and BASE.ctbl
+/// (3D Slicer's colour table), so names and colours travel with the volume. Nothing without a table.
+void writeLabelTables(Pipeline& pipeline, AtomicOutputs& out, const std::string& base);
+
+/// posed_mesh.vtu, posed_surfaces.vtp, posed_labels<labelsExt> with its tables and, when the
+/// pipeline has a rest image, posed_image<imageExt>.
+void writePosed(Pipeline& pipeline, AtomicOutputs& out, const std::string& labelsExt, const std::string& imageExt);
+
+}  // namespace repose
