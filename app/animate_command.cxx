@@ -26,6 +26,7 @@
 #include "atomic_outputs.h"
 #include "bvh.h"
 #include "cli_options.h"
+#include "console_progress.h"
 #include "clip_retargeting.h"
 #include "display_requirement.h"
 #include "fidelity_report.h"
@@ -68,7 +69,9 @@ const char* kAnimateUsage =
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
     "  --format EXT      the format of the frames' volumes (.nii.gz, .nii, .nrrd, .mha, .mhd, .vti); with .vti the\n"
     "                    label volume and CT of each frame are parts of animation.pvd too (ParaView)\n"
-    "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*)\n"
+    "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*); a\n"
+    "                    folder is read as a DICOM CT series (--series-uid UID when it holds several) and each\n"
+    "                    frame's CT written as one (DIR/frames/image_NNNNN/)\n"
     "  --mode            direction (default): each limb bone points where the BVH bone points, the trunk and\n"
     "                    head bend as the clip's bend from its rest pose; relative: each joint's rotation\n"
     "                    relative to --reference-frame (default 0), taken to be the scan's rest pose\n"
@@ -152,7 +155,7 @@ double parseVoxelCount(const std::string& text) {
 int runAnimateCommand(int argc, char** argv, int first) {
   const Options o(argc, argv, first,
                   {"case", "bvh", "out", "map", "frames", "skinning", "mode", "reference-frame", "unit-mm",
-                   "max-voxels", "image", "relax-iterations", "relax-model", "relax-volume", "relax-continuation",
+                   "max-voxels", "image", "series-uid", "relax-iterations", "relax-model", "relax-volume", "relax-continuation",
                    "relax-strained-region", "poisson", "relax-start", "compare", "mesh", "format"},
                   {"volumes", "no-root-motion", "relax", "strict"});
   if (o.help) return std::cout << kAnimateUsage, 0;
@@ -166,6 +169,7 @@ int runAnimateCommand(int argc, char** argv, int first) {
   const double maxVoxels = parseVoxelCount(o.get("max-voxels", "512M"));
   if (o.has("unit-mm") && !(o.number("unit-mm", 0) > 0)) throw UsageError("--unit-mm needs a positive number of millimetres");
   Pipeline pipeline;
+  pipeline.setProgress(throttledConsoleProgress("animate: "));
   pipeline.loadCase(caseDir);
   pipeline.setMaxPosedVoxels(maxVoxels);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
@@ -188,7 +192,7 @@ int runAnimateCommand(int argc, char** argv, int first) {
   fidelity.methods = parseCompare(o);
   std::string imageExt;
   if (o.has("image")) {
-    pipeline.setRestImage(readIntensityImage(o.get("image")), o.get("image"));
+    pipeline.setRestImage(readIntensityImage(o.get("image"), o.get("series-uid")), o.get("image"));
     imageExt = imageExtension(o.get("image"));
   }
   if (o.has("format") && !o.has("volumes") && !o.has("image"))

@@ -18,6 +18,7 @@
 #include "ReposeImageConversion.h"
 #include "atomic_outputs.h"
 #include "cli_options.h"
+#include "console_progress.h"
 #include "display_requirement.h"
 #include "fidelity_report.h"
 #include "mesh_binding.h"
@@ -42,6 +43,13 @@ const char* kPoseUsage =
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels. --format vti writes both volumes as VTK XML\n"
     "  image data with their direction matrix: ParaView opens them lined up with posed_mesh.vtu\n"
+    "  --image FILE            a CT/MRI on the case's label grid; a folder is read as a DICOM CT series\n"
+    "                          (--series-uid UID when it holds several) and the posed CT written as one\n"
+    "                          (DIR/posed_image/: a new series in the same study, image type DERIVED)\n"
+    "  --format dicom          DICOM for clinical systems: DIR/posed_labels.dcm, a DICOM Segmentation with a\n"
+    "                          segment per label (its name, colour, bone or tissue), and with --image the posed CT\n"
+    "                          as a DICOM series DIR/posed_image/, both in one study and frame of reference (the\n"
+    "                          CT's when it was DICOM, else a new one with an anonymous patient)\n"
     "  --format vdb            OpenVDB instead (Houdini, Blender): DIR/posed_labels.vdb holds an Int32 grid 'labels'\n"
     "                          (background 0) and a float fog grid 'label_<value>' per label; with --image,\n"
     "                          DIR/posed_image.vdb holds a float grid 'ct'. Each grid's transform is the volume's\n"
@@ -127,7 +135,7 @@ void writePosedVdb(Pipeline& pipeline, AtomicOutputs& out, double imageBackgroun
 /// Every file `pose` may write (each format's posed volumes), so that none can replace an input.
 std::vector<std::string> poseOutputNames(const std::vector<std::string>& meshes) {
   std::vector<std::string> names = {"posed_mesh.vtu", "posed_surfaces.vtp", "fidelity.csv", "fidelity.png"};
-  for (const char* ext : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".raw.gz", ".mha", ".mhd", ".raw", ".zraw", ".vdb"})
+  for (const char* ext : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".raw.gz", ".mha", ".mhd", ".raw", ".zraw", ".vdb", ".dcm", ""})
     for (const char* stem : {"posed_labels", "posed_image"}) names.push_back(stem + std::string(ext));
   for (const std::string& mesh : meshes) names.push_back(posedMeshName(mesh));
   return names;
@@ -137,7 +145,7 @@ std::vector<std::string> poseOutputNames(const std::vector<std::string>& meshes)
 
 int runPoseCommand(int argc, char** argv, int first) {
   const Options o(argc, argv, first,
-                  {"case", "pose", "out", "skinning", "image", "format", "relax-iterations", "relax-model",
+                  {"case", "pose", "out", "skinning", "image", "series-uid", "format", "relax-iterations", "relax-model",
                    "relax-volume", "relax-continuation", "relax-strained-region", "poisson", "compare", "mesh",
                    "displacement-field"},
                   {"relax"});
@@ -148,6 +156,7 @@ int runPoseCommand(int argc, char** argv, int first) {
   const std::string outDir = o.require("out");
   refuseOutputsOverInputs(outDir, poseOutputNames(o.all("mesh")), {inputFiles(o, {"pose", "image"}), {caseDir}});
   Pipeline pipeline;
+  pipeline.setProgress(throttledConsoleProgress("pose: "));
   pipeline.loadCase(caseDir);
   pipeline.setPose(readTextFile(posePath), posePath);
   pipeline.setSkinningMethod(o.get("skinning", "dqs"));
@@ -156,7 +165,7 @@ int runPoseCommand(int argc, char** argv, int first) {
   double imageBackground = 0;
   if (o.has("image")) {
     const std::string imagePath = o.get("image");
-    vtkSmartPointer<vtkImageData> image = readIntensityImage(imagePath);
+    vtkSmartPointer<vtkImageData> image = readIntensityImage(imagePath, o.get("series-uid"));
     pipeline.setRestImage(image, imagePath);
     imageExt = imageExtension(imagePath);
     double range[2];
@@ -164,8 +173,12 @@ int runPoseCommand(int argc, char** argv, int first) {
     imageBackground = range[0];  // the posed image's air outside the body (see Pipeline::setRestImage)
   }
   const bool vdb = isVdbFormat(o.get("format"));
-  const std::string labelsExt =
-      vdb ? ".vdb" : o.has("format") ? normalizedFormat(o.get("format")) : pipeline.labelsExtension();
+  const bool dicom = o.get("format") == "dicom";
+  const std::string labelsExt = vdb ? ".vdb"
+                                : dicom ? ".dcm"
+                                : o.has("format") ? normalizedFormat(o.get("format"))
+                                                  : pipeline.labelsExtension();
+  if (dicom) imageExt = "/";  // the posed CT as a DICOM series
   if (labelsExt == ".vti") imageExt = ".vti";  // for ParaView, the CT too
   const std::vector<std::string> compare = parseCompare(o);
   const std::string displacementName = o.has("displacement-field") ? displacementFileName(o.get("displacement-field")) : "";
@@ -176,6 +189,8 @@ int runPoseCommand(int argc, char** argv, int first) {
     writeSurfaces(pipeline.posedSurfaces(), out.stage("posed_surfaces.vtp"));
     writePosedVdb(pipeline, out, imageBackground);
     writeLabelTables(pipeline, out, "posed_labels");
+  } else if (dicom) {
+    writePosedDicom(pipeline, out);
   } else {
     writePosed(pipeline, out, labelsExt, imageExt);
   }

@@ -15,4 +15,9 @@ void writeLabelTables(Pipeline& pipeline, AtomicOutputs& out, const std::string&
 /// pipeline has a rest image, posed_image<imageExt>.
 void writePosed(Pipeline& pipeline, AtomicOutputs& out, const std::string& labelsExt, const std::string& imageExt);
 
+/// The same with the volumes in DICOM: posed_labels.dcm (a DICOM Segmentation, a segment per label
+/// named and coloured from the case's table) and, with a rest image, posed_image/ (a DICOM CT series),
+/// in one study and frame of reference: the CT's when it was read from DICOM, else a new one.
+void writePosedDicom(Pipeline& pipeline, AtomicOutputs& out);
+
 }  // namespace repose

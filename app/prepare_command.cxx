@@ -24,7 +24,8 @@ const char* kPrepareUsage =
     "  --skeleton auto         find the skeleton from the bone labels (see 'repose rig')\n"
     "  --label-table FILE      label names and kinds (TSV or 3D Slicer colour table); default: the table beside\n"
     "                          the labels, else TotalSegmentator's names (see 'repose rig --help')\n"
-    "  --image FILE            CT on the label grid: the body is the labels united with CT above the threshold\n"
+    "  --image FILE            CT on the label grid: the body is the labels united with CT above the threshold;\n"
+    "                          a folder is read as a DICOM CT series (--series-uid UID when it holds several)\n"
     "  --body-threshold HU     default -500\n"
     "  --max-tets N            tet budget (default 3000000, the paper's scale): the body is meshed on the finest\n"
     "                          voxel size, not finer than the labels', whose mesh fits it; 0 = the label spacing\n"
@@ -65,7 +66,7 @@ void prepareCase(Pipeline& pipeline, vtkImageData* labels, const std::string& la
 
 int runPrepareCommand(int argc, char** argv, int first) {
   const Options o(argc, argv, first,
-                  {"labels", "skeleton", "image", "out", "body-threshold", "mesh-spacing", "quality", "influences",
+                  {"labels", "skeleton", "image", "series-uid", "out", "body-threshold", "mesh-spacing", "quality", "influences",
                    "surface-reduction", "label-table", "max-gap", "contact-separation", "max-tets"},
                   {});
   if (o.help) return std::cout << kPrepareUsage, 0;
@@ -92,7 +93,7 @@ int runPrepareCommand(int argc, char** argv, int first) {
     tableTsv = caseLabelTable(labels, labelsPath, o);
   }
   vtkSmartPointer<vtkImageData> image;
-  if (o.has("image")) image = readIntensityImage(o.get("image"));
+  if (o.has("image")) image = readIntensityImage(o.get("image"), o.get("series-uid"));
   pipeline.setLabelTableTsv(tableTsv);
   prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath == "auto" ? "automatic skeleton" : skeletonPath,
               image, o.get("image"), o, caseDir, ext);

@@ -68,10 +68,11 @@ double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-vtkSmartPointer<vtkImageData> readImageFile(const std::string& path) {
+vtkSmartPointer<vtkImageData> readImageFile(const std::string& path, const std::string& seriesUid = "") {
   if (!fileExists(path)) throw std::runtime_error(path + ": no such file");
   auto reader = vtkSmartPointer<vtkReposeImageReader>::New();
   reader->SetFileName(path.c_str());
+  if (!seriesUid.empty()) reader->SetSeriesUID(seriesUid.c_str());
   reader->Update();
   if (reader->GetLastError() && *reader->GetLastError())
     throw std::runtime_error(reader->GetLastError());
@@ -300,8 +301,8 @@ vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
   return image;
 }
 
-vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path) {
-  vtkSmartPointer<vtkImageData> image = readImageFile(path);
+vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path, const std::string& seriesUid) {
+  vtkSmartPointer<vtkImageData> image = readImageFile(path, seriesUid);
   if (image->GetPointData()->GetScalars()->GetNumberOfComponents() != 1)
     throw std::runtime_error(path + ": image must have one component per voxel");
   return image;

@@ -54,7 +54,7 @@ constexpr int kMaxLabelValue = 1000000;
 /// "FILE: problem" (unreadable, not integer, negative or above kMaxLabelValue, empty).
 vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path);
 /// Reads an intensity image (CT/MRI) as float.
-vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path);
+vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path, const std::string& seriesUid = "");
 /// Writes an image, format from the extension; throws std::runtime_error naming the file.
 void writeImage(vtkImageData* image, const std::string& path);
 /// writeImage for label volumes: written in the smallest integer type that holds the labels

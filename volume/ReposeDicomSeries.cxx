@@ -69,6 +69,36 @@ std::string Text(double x)
   return buffer;
 }
 
+// A series' Series Instance UID and description, from its first file's header.
+struct SeriesLabel
+{
+  std::string UID, Description;
+};
+
+SeriesLabel LabelOf(const std::string& file)
+{
+  auto io = itk::GDCMImageIO::New();
+  io->SetFileName(file);
+  SeriesLabel label;
+  try
+  {
+    io->ReadImageInformation();
+    io->GetValueFromTag("0020|000e", label.UID);
+    io->GetValueFromTag("0008|103e", label.Description);
+  }
+  catch (const itk::ExceptionObject&)
+  {
+  }
+  for (std::string* text : { &label.UID, &label.Description })
+  {
+    while (!text->empty() && (text->back() == ' ' || text->back() == '\0'))
+    {
+      text->pop_back();
+    }
+  }
+  return label;
+}
+
 // The chosen series' file names; a one-line error naming what the folder holds otherwise.
 std::vector<std::string> SeriesFiles(const std::string& folder, const std::string& wanted, std::string& uid)
 {
@@ -81,22 +111,24 @@ std::vector<std::string> SeriesFiles(const std::string& folder, const std::strin
   {
     throw std::runtime_error("no DICOM series in this folder");
   }
-  // With series details the identifiers are the Series Instance UID followed by other attributes.
+  // With series details the identifiers are the Series Instance UID followed by other attributes:
+  // a series is chosen by its Series Instance UID (or that identifier).
   std::vector<std::string> matches;
+  std::string list;
   for (const std::string& u : uids)
   {
-    if (wanted.empty() || u == wanted || u.rfind(wanted + ".", 0) == 0)
+    const std::vector<std::string> files = names->GetFileNames(u);
+    const SeriesLabel label = LabelOf(files.front());
+    if (wanted.empty() || u == wanted || label.UID == wanted)
     {
       matches.push_back(u);
     }
+    list += (list.empty() ? "" : ", ") + (label.UID.empty() ? u : label.UID) +
+      (label.Description.empty() ? "" : " '" + label.Description + "'") + " (" + std::to_string(files.size()) +
+      " files)";
   }
   if (matches.size() != 1)
   {
-    std::string list;
-    for (const std::string& u : uids)
-    {
-      list += (list.empty() ? "" : ", ") + u + " (" + std::to_string(names->GetFileNames(u).size()) + " files)";
-    }
     throw std::runtime_error(wanted.empty()
         ? std::to_string(uids.size()) + " DICOM series in this folder, choose one with --series-uid: " + list
         : "no single DICOM series " + wanted + " in this folder (it holds " + list + ")");

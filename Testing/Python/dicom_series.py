@@ -6,7 +6,8 @@ patient and study with a new series UID; `prepare --image FOLDER` takes the seri
 label volume on the same grid, and `pose --image FOLDER` writes the posed CT as a derived DICOM series
 (posed_image/: the input's study, a new series, DERIVED image type, a description saying how it was
 made) with the same voxels as from the NIfTI CT. The posed labels written as a DICOM Segmentation (one
-segment per label, named) on that CT read back onto its grid voxel for voxel."""
+segment per label, named) on that CT read back onto its grid voxel for voxel; `pose --format dicom`
+writes both in one study; `--series-uid` chooses a series in a folder of two."""
 import os
 import shutil
 import sys
@@ -190,6 +191,42 @@ check(ok and got is not None and np.array_equal(expected, got) and len(names) ==
 data = open(f"{work}/posed_labels.dcm", "rb").read()
 check(first_tags["0020|000d"].encode() in data and b"1.2.840.10008.5.1.4.1.1.66.4" in data,
       "the SEG is a Segmentation Storage object in the CT's study", failures)
+
+# pose --format dicom from the NIfTI CT: posed_labels.dcm and posed_image/ in one new study and frame
+# of reference; the SEG read onto the posed CT's grid is the NIfTI run's posed labels voxel for voxel.
+run("pose", "--case", f"{work}/case", "--pose", pose, "--image", ct_path, "--format", "dicom",
+    "--out", f"{work}/posed_format_dicom")
+fd = f"{work}/posed_format_dicom"
+fd_image, err = read(f"{fd}/posed_image")
+seg_reader = vtkReposeDicomSegReader()
+for value, name, kind in table:
+    seg_reader.AddSegment(int(value), name)
+seg_reader.SetInputData(fd_image)
+seg_reader.SetFileName(f"{fd}/posed_labels.dcm")
+seg_reader.Update()
+got = vtk_to_numpy(seg_reader.GetOutput().GetPointData().GetScalars()) if not seg_reader.GetLastError() else None
+fd_tags = tags(fd_image)
+seg_bytes = open(f"{fd}/posed_labels.dcm", "rb").read()
+check(not err and got is not None and np.array_equal(got, expected) and fd_tags.get("0020|000d") and
+      fd_tags["0020|000d"].encode() in seg_bytes and fd_tags.get("0020|0052", "").encode() in seg_bytes and
+      fd_tags["0020|000d"] != first_tags["0020|000d"] and os.path.exists(f"{fd}/posed_labels.tsv"),
+      f"pose --format dicom: posed_labels.dcm on posed_image/ voxel for voxel, one study and frame of reference "
+      f"({err}{seg_reader.GetLastError()})", failures)
+
+# --series-uid on the command line: a folder with two whole series is refused without it, read with it.
+os.makedirs(f"{work}/both")
+for name in files:
+    shutil.copy(f"{work}/ct/{name}", f"{work}/both/a_{name}")
+    shutil.copy(f"{work}/ct2/{name}", f"{work}/both/b_{name}")
+code, _, err = run("pose", "--case", f"{work}/case", "--pose", pose, "--image", f"{work}/both",
+                   "--out", f"{work}/posed_both", check=False)
+check(code != 0 and "choose one with --series-uid" in err and not os.path.exists(f"{work}/posed_both"),
+      f"two series without --series-uid: {err.strip()}", failures)
+run("pose", "--case", f"{work}/case", "--pose", pose, "--image", f"{work}/both", "--series-uid",
+    series_uid(f"{work}/ct2/{files[0]}"), "--out", f"{work}/posed_both")
+chosen, err = read(f"{work}/posed_both/posed_image")
+check(not err and np.array_equal(voxels(chosen), voxels(posed)),
+      f"with --series-uid the chosen series is posed, as from its own folder ({err})", failures)
 
 print(f"{len(failures)} failed")
 sys.exit(1 if failures else 0)
