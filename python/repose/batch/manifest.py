@@ -65,11 +65,13 @@ class _Checker:
             self.fail(where, f"unknown key '{unknown[0]}' (known: {', '.join(allowed)})")
 
     def file(self, value, where, folder=False):
+        """A file (folder=True: a folder; folder=None: either, as a CT file or a DICOM series folder)."""
         if not isinstance(value, str) or not value:
             self.fail(where, "needs a file name")
         path = os.path.normpath(os.path.join(self.base, os.path.expanduser(value)))
-        if not (os.path.isdir(path) if folder else os.path.isfile(path)):
-            self.fail(where, f"{path}: no such {'folder' if folder else 'file'}")
+        found = os.path.exists(path) if folder is None else os.path.isdir(path) if folder else os.path.isfile(path)
+        if not found:
+            self.fail(where, f"{path}: no such {'file or folder' if folder is None else 'folder' if folder else 'file'}")
         return path
 
     def number(self, value, where, whole=False):
@@ -241,7 +243,7 @@ def load_manifest(path):
         subject = {
             "name": name, "labels": labels,
             "skeleton": "auto" if skeleton == "auto" else c.file(skeleton, f"{where}.skeleton"),
-            "image": c.file(entry["image"], f"{where}.image") if entry.get("image") else None,
+            "image": c.file(entry["image"], f"{where}.image", folder=None) if entry.get("image") else None,
             "label_table": c.file(entry["label_table"], f"{where}.label_table") if entry.get("label_table") else None,
             "settings": c.settings(entry, defaults, where),
             "poses": _poses(c, entry, where), "clips": _clips(c, entry, where)}

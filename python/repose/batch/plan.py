@@ -28,8 +28,22 @@ def key_of(what):
     return hashlib.sha256(json.dumps(what, sort_keys=True).encode("utf-8")).hexdigest()
 
 
+def folder_hash(path):
+    """sha256 over a folder's files (a DICOM series): each file's name and contents, in name order."""
+    h = hashlib.sha256()
+    for name in sorted(os.listdir(path)):
+        if os.path.isfile(os.path.join(path, name)):
+            h.update(f"{name}\0{file_hash(os.path.join(path, name))}\0".encode("utf-8"))
+    return h.hexdigest()
+
+
 def _input(path):
-    return None if path is None else {"path": path, "sha256": file_hash(path), "bytes": os.path.getsize(path)}
+    if path is None:
+        return None
+    if os.path.isdir(path):
+        files = [os.path.join(path, n) for n in os.listdir(path) if os.path.isfile(os.path.join(path, n))]
+        return {"path": path, "sha256": folder_hash(path), "bytes": sum(os.path.getsize(f) for f in files)}
+    return {"path": path, "sha256": file_hash(path), "bytes": os.path.getsize(path)}
 
 
 def _posing(settings, image):

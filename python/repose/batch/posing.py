@@ -10,7 +10,7 @@ from vtkmodules.vtkCommonCore import vtkDataArray
 from vtkmodules.vtkIOXML import (vtkXMLPolyDataReader, vtkXMLPolyDataWriter, vtkXMLUnstructuredGridReader,
                                  vtkXMLUnstructuredGridWriter)
 
-from repose import (vtkReposeCorotationalRelax, vtkReposeImageReader, vtkReposeImageWriter, vtkReposeLabelTable,
+from repose import (vtkReposeCorotationalRelax, vtkReposeDicomSeriesWriter, vtkReposeImageReader, vtkReposeImageWriter, vtkReposeLabelTable,
                     vtkReposePosedVolume, vtkReposeSkeletonPoses, vtkReposeSkinning, vtkReposeSurfaceDeformer)
 
 from .checked_files import WriteFailure, check_written, failure_reason, write_text
@@ -28,7 +28,10 @@ IMAGE_EXTENSIONS = (".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd")
 
 
 def image_extension(path, fallback=".nii.gz"):
-    """"a/b/labels.nii.gz" -> ".nii.gz"; `fallback` for none of the image formats."""
+    """"a/b/labels.nii.gz" -> ".nii.gz"; "/" for a folder (a DICOM series); `fallback` for none of the
+    image formats."""
+    if path and os.path.isdir(path):
+        return "/"
     return next((e for e in IMAGE_EXTENSIONS if path and path.endswith(e)), fallback)
 
 
@@ -49,7 +52,7 @@ def update(algorithm, what):
 
 
 def read_image(path, what):
-    if not os.path.isfile(path):
+    if not os.path.exists(path):  # a file, or a folder holding a DICOM series
         raise RuntimeError(f"{path}: no such file")
     reader = vtkReposeImageReader()
     reader.SetFileName(path)
@@ -61,6 +64,16 @@ def read_image(path, what):
     if scalars is None or scalars.GetNumberOfComponents() != 1:
         raise RuntimeError(f"{path}: cannot read {what}")
     return image
+
+
+def write_dicom_series(image, folder):
+    """The posed CT of a DICOM input as a DICOM series (the input's patient and study, a new series)."""
+    writer = vtkReposeDicomSeriesWriter()
+    writer.SetFileName(folder)
+    writer.SetSeriesDescription(f"Reposed (Repose {os.environ.get('REPOSE_VERSION', '')})".replace(" )", ")"))
+    writer.SetInputData(image)
+    if not writer.Write():
+        raise RuntimeError(writer.GetLastError() or f"{folder}: cannot write the DICOM series")
 
 
 def write_image(image, path, labels=False):
@@ -271,7 +284,10 @@ class CasePoser:
                 for name, text in (("posed_labels.tsv", self.label_table.GetTsv()),
                                    ("posed_labels.ctbl", self.label_table.GetSlicerColorTable())):
                     write_text(os.path.join(folder, name), text)
-        if posed["image"] is not None:
+        if posed["image"] is not None and image_ext == "/":  # a DICOM CT series, as `repose pose` writes it
+            files.append("posed_image")
+            write_dicom_series(posed["image"], os.path.join(folder, files[-1]))
+        elif posed["image"] is not None:
             files.append("posed_image" + image_ext)
             write_image(posed["image"], os.path.join(folder, files[-1]))
         # Companion files (.raw of .mhd/.nhdr) are results too.

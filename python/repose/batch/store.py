@@ -63,6 +63,6 @@ def completed(final_dir, key):
         return None
     if record.get("key") != key or record.get("status") != "done":
         return None
-    if not all(os.path.isfile(os.path.join(final_dir, name)) for name in record.get("files", [])):
+    if not all(os.path.exists(os.path.join(final_dir, name)) for name in record.get("files", [])):  # a DICOM series is a folder
         return None
     return record
