@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <initializer_list>
 #include <iomanip>
 #include <set>
@@ -266,6 +267,9 @@ void checkMeshOnGrid(vtkPointSet* mesh, const std::string& meshPath, vtkImageDat
 }  // namespace
 
 vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
+  // A folder would be read as a DICOM CT series and its outputs written as one: labels are files.
+  if (std::filesystem::is_directory(path))
+    throw std::runtime_error(path + ": a folder; label volumes are read from files (NIfTI, NRRD, MetaImage)");
   vtkSmartPointer<vtkImageData> image = readImageFile(path);
   vtkDataArray* scalars = image->GetPointData()->GetScalars();
   if (scalars->GetNumberOfComponents() != 1)

@@ -163,6 +163,18 @@ DicomSeriesVolume ReadDicomSeries(const std::string& folder, const std::string& 
   reader->SetImageIO(io);
   reader->SetFileNames(files);
   reader->SetGlobalWarningDisplay(false);
+  // The slice headers' sizes, checked before any voxel is allocated (a damaged header can claim rows
+  // and columns enough for gigabytes per slice).
+  reader->UpdateOutputInformation();
+  double voxels = 1.0;
+  for (unsigned a = 0; a < 3; ++a)
+  {
+    voxels *= double(reader->GetOutput()->GetLargestPossibleRegion().GetSize()[a]);
+  }
+  if (!(voxels >= 1.0 && voxels <= 4294967295.0))
+  {
+    throw std::runtime_error("DICOM series claims " + Text(voxels) + " voxels");
+  }
   reader->Update();
   DicomSeriesVolume out;
   out.Image = reader->GetOutput();
@@ -220,18 +232,12 @@ void WriteDicomSeries(const Volume* image, const std::string& folder, const Dico
     const std::string seriesUID = uids.Generate();
     std::string studyUID;
     itk::MetaDataDictionary base;
+    bool frameOfReference = false; // one for the whole series: its slices share a patient frame
     for (const auto& [key, value] : carried)
     {
       itk::EncapsulateMetaData<std::string>(base, key, value);
-      if (key == "0020|000d")
-      {
-        studyUID = value;
-      }
-    }
-    bool frameOfReference = false; // one for the whole series: its slices share a patient frame
-    for (const auto& tag : carried)
-    {
-      frameOfReference = frameOfReference || tag.first == "0020|0052";
+      studyUID = key == "0020|000d" ? value : studyUID;
+      frameOfReference = frameOfReference || key == "0020|0052";
     }
     if (!frameOfReference)
     {

@@ -145,6 +145,10 @@ code, out, err = run("prepare", "--labels", labels, "--image", f"{work}/ct", "--
                      "--label-table", os.path.join(SHARED, "totalsegmentator", "labels_total_v2.tsv"),
                      "--max-tets", 60000, "--out", f"{work}/case", check=False)
 check(code == 0, f"prepare --image takes a DICOM folder ({err.strip()})", failures)
+code, _, err = run("prepare", "--labels", f"{work}/ct", "--skeleton", "auto", "--out", f"{work}/case_from_folder",
+                   check=False)
+check(code != 0 and "a folder; label volumes are read from files" in err and not os.path.exists(f"{work}/case_from_folder"),
+      f"a DICOM folder given as the labels is refused: {err.strip()}", failures)
 pose = f"{work}/pose.json"
 with open(pose, "w") as f:
     f.write('{"rotations": {"left_hip": {"axis": [1, 0, 0], "degrees": -40}}}')
