@@ -17,6 +17,8 @@
 #include <vtkCellType.h>
 #include <vtkDataArray.h>
 #include <vtkFloatArray.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
@@ -24,25 +26,18 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include "ReposeMeshConversion.h"
+#include "array_names.h"
 #include "mesh_io.h"
-#include "tet_locator.h"
+#include "repose_pipeline.h"
 #include "tet_mesh.h"
+#include "vtkReposeSurfaceBinding.h"
+#include "vtkReposeSurfaceDeformer.h"
 
 namespace repose {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-Points toPoints(vtkPoints* points) {
-  const vtkIdType n = points ? points->GetNumberOfPoints() : 0;
-  Points p(n, 3);
-  for (vtkIdType i = 0; i < n; ++i) {
-    double x[3];
-    points->GetPoint(i, x);
-    p.row(i) << x[0], x[1], x[2];
-  }
-  return p;
-}
 
 std::string hex16(std::uint64_t h) {
   std::ostringstream s;
@@ -57,38 +52,83 @@ std::string safeStem(const std::string& path) {
   return stem.empty() ? "mesh" : stem;
 }
 
+// Runs a filter; its error becomes "PATH: what (the filter's message)".
+void updateOrThrowFor(vtkAlgorithm* filter, const std::string& path, const std::string& what) {
+  try {
+    updateOrThrow(filter, what);
+  } catch (const std::runtime_error& e) {
+    std::string detail = e.what();
+    const std::string prefix = what + " failed: ";
+    if (detail.compare(0, prefix.size(), prefix) == 0) detail = detail.substr(prefix.size());
+    throw std::runtime_error(path + ": " + what + " (" + detail + ")");
+  }
+}
+
+// The binding as the filters carry it: point data BoundTet and BoundWeights on a copy of `rest`.
+vtkSmartPointer<vtkPolyData> withBinding(vtkPolyData* rest, const Binding& binding) {
+  const vtkIdType n = vtkIdType(binding.tet.size());
+  auto tets = vtkSmartPointer<vtkIntArray>::New();
+  tets->SetName(arrays::kBoundTet);
+  tets->SetNumberOfTuples(n);
+  std::copy(binding.tet.begin(), binding.tet.end(), tets->GetPointer(0));
+  auto weights = vtkSmartPointer<vtkFloatArray>::New();
+  weights->SetName(arrays::kBoundWeights);
+  weights->SetNumberOfComponents(4);
+  weights->SetNumberOfTuples(n);
+  std::copy(binding.bary.data(), binding.bary.data() + 4 * n, weights->GetPointer(0));
+  auto bound = vtkSmartPointer<vtkPolyData>::New();
+  bound->ShallowCopy(rest);
+  bound->GetPointData()->AddArray(tets);
+  bound->GetPointData()->AddArray(weights);
+  return bound;
+}
+
+// The binding back from the filter's arrays (for the cache file).
+Binding bindingOf(vtkPolyData* bound, std::size_t outside) {
+  auto* tets = vtkIntArray::SafeDownCast(bound->GetPointData()->GetArray(arrays::kBoundTet));
+  auto* weights = vtkFloatArray::SafeDownCast(bound->GetPointData()->GetArray(arrays::kBoundWeights));
+  if (!tets || !weights) throw std::logic_error("mesh posing: the binding filter left no BoundTet/BoundWeights");
+  const vtkIdType n = tets->GetNumberOfTuples();
+  Binding b;
+  b.tet.assign(tets->GetPointer(0), tets->GetPointer(0) + n);
+  b.bary.resize(n, 4);
+  std::copy(weights->GetPointer(0), weights->GetPointer(0) + 4 * n, b.bary.data());
+  b.outsideCount = outside;
+  return b;
+}
+
 }  // namespace
 
 std::string posedMeshName(const std::string& path) {
   return "posed_" + std::filesystem::path(path).filename().string();
 }
 
+// The rest mesh's fingerprint keys the binding cache; the filters do the binding and the posing.
 struct MeshPoser::Rest {
-  Points nodes;
-  Tets tets;
+  vtkSmartPointer<vtkUnstructuredGrid> mesh;
+  std::size_t nodes = 0, tets = 0;
   std::uint64_t hash = 0;
-  std::unique_ptr<TetLocator> locator;  // built on the first binding that is not cached
+  vtkNew<vtkReposeSurfaceBinding> binder;  // keeps its locator between meshes
+  std::vector<vtkSmartPointer<vtkReposeSurfaceDeformer>> deformers;  // one per mesh: keeps its binding
 };
 
 MeshPoser::MeshPoser(vtkUnstructuredGrid* restMesh) : rest_(std::make_unique<Rest>()) {
   if (!restMesh || restMesh->GetNumberOfCells() == 0 || !restMesh->GetPoints())
     throw std::runtime_error("mesh posing: the case has no tet mesh");
-  rest_->nodes = toPoints(restMesh->GetPoints());
-  const vtkIdType nc = restMesh->GetNumberOfCells();
-  rest_->tets.resize(nc, 4);
-  vtkCellArray* cells = restMesh->GetCells();
-  vtkDataArray* conn = cells->GetConnectivityArray();
-  vtkDataArray* offsets = cells->GetOffsetsArray();
-  vtkUnsignedCharArray* types = restMesh->GetCellTypesArray();
-  if (conn->GetNumberOfTuples() != 4 * nc)
-    throw std::runtime_error("mesh posing: the case's mesh has cells that are not tetrahedra");
-  for (vtkIdType c = 0; c < nc; ++c) {
-    if ((types && types->GetValue(c) != VTK_TETRA) || vtkIdType(offsets->GetTuple1(c)) != 4 * c)
-      throw std::runtime_error("mesh posing: the case's mesh has cells that are not tetrahedra");
-    for (int k = 0; k < 4; ++k) rest_->tets(c, k) = int(conn->GetTuple1(4 * c + k));
+  Points nodes;
+  Tets tets;
+  try {
+    nodes = repose_vtk::ToPoints(restMesh->GetPoints());
+    tets = repose_vtk::ToTets(restMesh, "the case's mesh");
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("mesh posing: ") + e.what());
   }
-  rest_->hash = contentHash(rest_->tets.data(), std::size_t(rest_->tets.size()) * sizeof(int),
-                            contentHash(rest_->nodes.data(), std::size_t(rest_->nodes.size()) * sizeof(double)));
+  rest_->mesh = restMesh;
+  rest_->nodes = std::size_t(nodes.rows());
+  rest_->tets = std::size_t(tets.rows());
+  rest_->hash = contentHash(tets.data(), std::size_t(tets.size()) * sizeof(int),
+                            contentHash(nodes.data(), std::size_t(nodes.size()) * sizeof(double)));
+  rest_->binder->SetTetMeshData(restMesh);
 }
 
 MeshPoser::~MeshPoser() = default;
@@ -98,40 +138,40 @@ const PoseableMesh& MeshPoser::add(const std::string& path, const std::string& c
   m.path = path;
   m.rest = readPolyData(path);
   const auto t0 = Clock::now();
-  const Points points = toPoints(m.rest->GetPoints());
+  const Points points = repose_vtk::ToPoints(m.rest->GetPoints());
   const std::uint64_t pointsHash = contentHash(points.data(), std::size_t(points.size()) * sizeof(double));
-  const std::size_t nodeCount = std::size_t(rest_->nodes.rows()), tetCount = std::size_t(rest_->tets.rows());
-  Binding binding;
+  Binding cached;
   if (!cacheDir.empty()) {
     m.cachePath = cacheDir + "/" + safeStem(path) + "-" + hex16(pointsHash) + ".bin";
-    m.fromCache = readBindingCache(m.cachePath, pointsHash, rest_->hash, std::size_t(points.rows()), nodeCount,
-                                   tetCount, binding);
+    m.fromCache = readBindingCache(m.cachePath, pointsHash, rest_->hash, std::size_t(points.rows()), rest_->nodes,
+                                   rest_->tets, cached);
   }
-  if (!m.fromCache) {
-    try {
-      if (!rest_->locator) rest_->locator = std::make_unique<TetLocator>(rest_->nodes, rest_->tets);
-      binding = bindPoints(*rest_->locator, points);
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(path + ": cannot bind to the case's mesh (" + e.what() + ")");
-    }
+  if (m.fromCache) {
+    m.bound = withBinding(m.rest, cached);
+    m.outside = cached.outsideCount;
+  } else {
+    rest_->binder->SetInputData(m.rest);
+    updateOrThrowFor(rest_->binder, path, "cannot bind to the case's mesh");
+    m.bound = vtkSmartPointer<vtkPolyData>::New();
+    m.bound->ShallowCopy(rest_->binder->GetOutput());
+    rest_->binder->SetInputData(nullptr);
+    m.outside = std::size_t(rest_->binder->GetOutsideCount());
     if (!cacheDir.empty()) {
       try {
         std::error_code ec;
         std::filesystem::create_directories(cacheDir, ec);
         if (ec) throw std::runtime_error(cacheDir + ": cannot create (" + ec.message() + ")");
-        writeBindingCache(m.cachePath, binding, pointsHash, rest_->hash, nodeCount, tetCount);
+        writeBindingCache(m.cachePath, bindingOf(m.bound, m.outside), pointsHash, rest_->hash, rest_->nodes,
+                          rest_->tets);
       } catch (const std::exception& e) {
         m.cacheWarning = e.what();
         m.cachePath.clear();
       }
     }
   }
-  m.outside = binding.outsideCount;
-  try {
-    m.binding = makeNodeBinding(binding, rest_->tets);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(path + ": " + e.what());
-  }
+  auto deformer = vtkSmartPointer<vtkReposeSurfaceDeformer>::New();
+  deformer->SetInputData(m.bound);
+  rest_->deformers.push_back(deformer);
   m.bindSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
   meshes_.push_back(std::move(m));
   return meshes_.back();
@@ -141,31 +181,19 @@ vtkSmartPointer<vtkPolyData> MeshPoser::pose(std::size_t i, vtkUnstructuredGrid*
   if (i >= meshes_.size()) throw std::out_of_range("mesh posing: no mesh " + std::to_string(i));
   const PoseableMesh& m = meshes_[i];
   vtkPoints* nodes = posedMesh ? posedMesh->GetPoints() : nullptr;
-  if (!nodes || std::size_t(nodes->GetNumberOfPoints()) != std::size_t(rest_->nodes.rows()))
+  if (!nodes || std::size_t(nodes->GetNumberOfPoints()) != rest_->nodes)
     throw std::runtime_error("mesh posing: the posed tet mesh does not match the case's rest mesh");
-  const vtkIdType n = m.rest->GetNumberOfPoints();
+  vtkReposeSurfaceDeformer* deformer = rest_->deformers[i];
+  deformer->SetPosedMeshData(posedMesh);
+  updateOrThrowFor(deformer, m.path, "cannot pose");
+  // The deformer reuses its points between poses: this pose keeps its own. The binding arrays stay behind.
   auto moved = vtkSmartPointer<vtkPoints>::New();
-  moved->SetDataTypeToFloat();
-  moved->SetNumberOfPoints(n);
-  float* dst = vtkFloatArray::SafeDownCast(moved->GetData())->GetPointer(0);
-  vtkDataArray* data = nodes->GetData();
-  const std::size_t nv = std::size_t(nodes->GetNumberOfPoints());
-  try {
-    if (auto* f = vtkArrayDownCast<vtkAOSDataArrayTemplate<float>>(data)) {
-      applyBinding(m.binding, f->GetPointer(0), nv, dst);
-    } else if (auto* d = vtkArrayDownCast<vtkAOSDataArrayTemplate<double>>(data)) {
-      applyBinding(m.binding, d->GetPointer(0), nv, dst);
-    } else {
-      const Points p = toPoints(nodes);
-      applyBinding(m.binding, p.data(), nv, dst);
-    }
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(m.path + ": " + e.what());
-  }
+  moved->DeepCopy(deformer->GetOutput()->GetPoints());
   auto out = vtkSmartPointer<vtkPolyData>::New();
   out->ShallowCopy(m.rest);
   out->SetPoints(moved);
   // Rest normals are wrong after deformation: recompute them (same points and cells) where there were any.
+  const vtkIdType n = m.rest->GetNumberOfPoints();
   const bool hadNormals = m.rest->GetPointData()->GetNormals() != nullptr;
   out->GetPointData()->SetNormals(nullptr);
   out->GetCellData()->SetNormals(nullptr);

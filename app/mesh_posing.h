@@ -1,8 +1,9 @@
 #pragma once
 // Posing arbitrary meshes (organs, vessels, nerves, a catheter path) with a prepared case: each
-// vertex is bound once to the rest tet mesh (the containing tet, or the nearest tet's barycentric
-// extrapolation outside the body) and then moves with the posed tet mesh. Bindings are cached on
-// disk, keyed by the mesh's vertex coordinates, so posing the same mesh again skips the binding.
+// vertex is bound once to the rest tet mesh by vtkReposeSurfaceBinding (the containing tet, or the
+// nearest tet's barycentric extrapolation outside the body) and then moves with the posed tet mesh
+// through vtkReposeSurfaceDeformer. Bindings are cached on disk, keyed by the mesh's vertex
+// coordinates, so posing the same mesh again skips the binding.
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,7 +23,7 @@ std::string posedMeshName(const std::string& path);
 struct PoseableMesh {
   std::string path;            ///< input file
   vtkSmartPointer<vtkPolyData> rest;
-  NodeBinding binding;         ///< vertex -> 4 rest-mesh nodes and weights
+  vtkSmartPointer<vtkPolyData> bound;  ///< `rest` with the binding: BoundTet, BoundWeights (vtkReposeSurfaceBinding)
   std::size_t outside = 0;     ///< vertices outside the body (nearest-tet extrapolation)
   bool fromCache = false;      ///< binding read from the cache rather than computed
   double bindSeconds = 0;      ///< time to bind, or to read the cached binding

@@ -38,6 +38,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
+#include "ReposeMeshConversion.h"
 #include "vtkReposeBodyMesher.h"
 #include "vtkReposeCorotationalRelax.h"
 #include "vtkReposeDicomSeriesWriter.h"
@@ -652,28 +653,12 @@ void Pipeline::setPose(const Pose& pose) {
 }
 
 namespace {
-double signedVolume(vtkPoints* points, const Eigen::Matrix<int, Eigen::Dynamic, 4, Eigen::RowMajor>& tets) {
-  Points nodes(points->GetNumberOfPoints(), 3);
-  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
-    double x[3];
-    points->GetPoint(i, x);
-    nodes.row(i) << x[0], x[1], x[2];
-  }
-  return meshVolume(nodes, tets);
-}
+double signedVolume(vtkPoints* points, const Tets& tets) { return meshVolume(repose_vtk::ToPoints(points), tets); }
 }  // namespace
 
 double Pipeline::restMeshVolume() {
   if (!restMesh_) throw std::runtime_error("no case loaded");
-  if (tets_.rows() != restMesh_->GetNumberOfCells()) {
-    tets_.resize(restMesh_->GetNumberOfCells(), 4);
-    auto ids = vtkSmartPointer<vtkIdList>::New();
-    for (vtkIdType c = 0; c < restMesh_->GetNumberOfCells(); ++c) {
-      restMesh_->GetCellPoints(c, ids);
-      if (ids->GetNumberOfIds() != 4) throw std::runtime_error("the case's mesh has a cell that is not a tetrahedron");
-      for (int k = 0; k < 4; ++k) tets_(c, k) = static_cast<int>(ids->GetId(k));
-    }
-  }
+  if (tets_.rows() != restMesh_->GetNumberOfCells()) tets_ = repose_vtk::ToTets(restMesh_, "the case's mesh");
   return signedVolume(restMesh_->GetPoints(), tets_);
 }
 
@@ -695,16 +680,7 @@ DeformationStats Pipeline::posedStats() {
       for (vtkIdType c = 0; c < labels->GetNumberOfTuples() && c < tets_.rows(); ++c)
         tetLabels_[std::size_t(c)] = static_cast<std::int32_t>(labels->GetTuple1(c));
   }
-  auto toPoints = [](vtkPoints* points) {
-    Points p(points->GetNumberOfPoints(), 3);
-    for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
-      double x[3];
-      points->GetPoint(i, x);
-      p.row(i) << x[0], x[1], x[2];
-    }
-    return p;
-  };
-  return deformationStats(toPoints(restMesh_->GetPoints()), toPoints(posedMesh()->GetPoints()), tets_, tetLabels_);
+  return deformationStats(repose_vtk::ToPoints(restMesh_->GetPoints()), repose_vtk::ToPoints(posedMesh()->GetPoints()), tets_, tetLabels_);
 }
 
 double Pipeline::posedMeshVolume() {

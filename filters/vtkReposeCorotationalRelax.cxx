@@ -17,6 +17,7 @@
 
 #include <exception>
 
+#include "ReposeMeshConversion.h"
 #include "ReposeWeightArrays.h"
 #include "body_segments.h"
 #include "corotational_fem.h"
@@ -25,21 +26,6 @@
 #include "array_names.h"
 
 vtkStandardNewMacro(vtkReposeCorotationalRelax);
-
-namespace
-{
-repose::Points ToPoints(vtkPoints* points)
-{
-  repose::Points p(points->GetNumberOfPoints(), 3);
-  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i)
-  {
-    double x[3];
-    points->GetPoint(i, x);
-    p.row(i) << x[0], x[1], x[2];
-  }
-  return p;
-}
-}
 
 // The filter's enums are the core's, value for value: RequestData passes them on by a cast.
 namespace
@@ -139,8 +125,8 @@ int vtkReposeCorotationalRelax::RequestData(
     {
       fixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
     }
-    const repose::Points restNodes = ToPoints(rest->GetPoints());
-    repose::Points nodes = ToPoints(posed->GetPoints());
+    const repose::Points restNodes = repose_vtk::ToPoints(rest->GetPoints());
+    repose::Points nodes = repose_vtk::ToPoints(posed->GetPoints());
 
     repose::CorotationalOptions options;
     options.poisson = this->PoissonRatio;

@@ -13,54 +13,36 @@
 #include "vtkUnstructuredGrid.h"
 
 #include "barycentric_binding.h"
+#include "tet_locator.h"
+#include "ReposeMeshConversion.h"
 #include "array_names.h"
 
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 vtkStandardNewMacro(vtkReposeSurfaceBinding);
 
-namespace
+// The rest mesh as core matrices and its locator, kept while the mesh's points and cells are unchanged.
+struct vtkReposeSurfaceBinding::Internals
 {
-repose::Points ToPoints(vtkPoints* points)
-{
-  const vtkIdType n = points ? points->GetNumberOfPoints() : 0;
-  repose::Points P(n, 3);
-  for (vtkIdType i = 0; i < n; ++i)
-  {
-    double x[3];
-    points->GetPoint(i, x);
-    P.row(i) << x[0], x[1], x[2];
-  }
-  return P;
-}
-
-repose::Tets ToTets(vtkUnstructuredGrid* mesh)
-{
-  const vtkIdType n = mesh->GetNumberOfCells();
-  repose::Tets T(n, 4);
-  vtkIdType npts;
-  const vtkIdType* pts;
-  for (vtkIdType c = 0; c < n; ++c)
-  {
-    if (mesh->GetCellType(c) != VTK_TETRA)
-    {
-      throw std::invalid_argument("tet mesh cell " + std::to_string(c) +
-        " is not a tetrahedron; bind to a tet mesh (e.g. from vtkReposeBodyMesher)");
-    }
-    mesh->GetCellPoints(c, npts, pts);
-    for (int a = 0; a < 4; ++a)
-    {
-      T(c, a) = static_cast<int>(pts[a]);
-    }
-  }
-  return T;
-}
-}
+  vtkUnstructuredGrid* Mesh = nullptr;
+  vtkMTimeType PointsTime = 0;
+  vtkMTimeType CellsTime = 0;
+  repose::Points Nodes;
+  repose::Tets Tets;
+  std::unique_ptr<repose::TetLocator> Locator;  // refers to Nodes and Tets
+};
 
 vtkReposeSurfaceBinding::vtkReposeSurfaceBinding()
+  : Impl(new Internals)
 {
   this->SetNumberOfInputPorts(2);
+}
+
+vtkReposeSurfaceBinding::~vtkReposeSurfaceBinding()
+{
+  delete this->Impl;
 }
 
 int vtkReposeSurfaceBinding::FillInputPortInformation(int port, vtkInformation* info)
@@ -82,10 +64,24 @@ int vtkReposeSurfaceBinding::RequestData(
   }
   try
   {
-    const repose::Points nodes = ToPoints(mesh->GetPoints());
-    const repose::Tets tets = ToTets(mesh);
-    const repose::Points points = ToPoints(surface->GetPoints());
-    const repose::Binding binding = repose::bindPoints(nodes, tets, points);
+    Internals& in = *this->Impl;
+    const vtkMTimeType pointsTime = mesh->GetPoints() ? mesh->GetPoints()->GetMTime() : 0;
+    const vtkMTimeType cellsTime = mesh->GetCells() ? mesh->GetCells()->GetMTime() : 0;
+    if (!in.Locator || in.Mesh != mesh || in.PointsTime != pointsTime || in.CellsTime != cellsTime)
+    {
+      in.Locator.reset();
+      in.Nodes = repose_vtk::ToPoints(mesh->GetPoints());
+      in.Tets = repose_vtk::ToTets(mesh, "tet mesh");
+      if (in.Tets.rows() == 0)
+      {
+        throw std::invalid_argument("bind points: the tet mesh has no tets");
+      }
+      in.Locator = std::make_unique<repose::TetLocator>(in.Nodes, in.Tets);
+      in.Mesh = mesh;
+      in.PointsTime = pointsTime;
+      in.CellsTime = cellsTime;
+    }
+    const repose::Binding binding = repose::bindPoints(*in.Locator, repose_vtk::ToPoints(surface->GetPoints()));
     const vtkIdType n = static_cast<vtkIdType>(binding.tet.size());
     auto tetArray = vtkSmartPointer<vtkIntArray>::New();
     tetArray->SetName(repose::arrays::kBoundTet);

@@ -3,6 +3,8 @@
 // Binds surface vertices to the rest tet mesh: input 0 = rest surfaces (vtkPolyData), input 1 = rest
 // tet mesh (vtkUnstructuredGrid of tetrahedra). Output: the surface with point data "BoundTet" (int)
 // and "BoundWeights" (float, 4 components: barycentric coordinates; negative outside the mesh).
+// The tet locator is kept while the tet mesh's points and cells are unchanged, so binding several
+// surfaces (organs, vessels, a catheter) to one case builds it once.
 
 #include "ReposeFiltersModule.h"
 #include "vtkPolyDataAlgorithm.h"
@@ -22,7 +24,7 @@ public:
 
 protected:
   vtkReposeSurfaceBinding();
-  ~vtkReposeSurfaceBinding() override = default;
+  ~vtkReposeSurfaceBinding() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
@@ -32,6 +34,8 @@ protected:
 private:
   vtkReposeSurfaceBinding(const vtkReposeSurfaceBinding&) = delete;
   void operator=(const vtkReposeSurfaceBinding&) = delete;
+  struct Internals;
+  Internals* Impl;
 };
 
 #endif

@@ -19,6 +19,7 @@
 #include "resample_pull.h"
 #include "rigid_bone_overlay.h"
 #include "tet_boundary.h"
+#include "ReposeMeshConversion.h"
 #include "array_names.h"
 
 #include <algorithm>
@@ -89,44 +90,6 @@ void CopyScalars(vtkDataArray* array, std::vector<D>& dst)
     default:
       throw std::invalid_argument(std::string("unsupported image scalar type ") + array->GetDataTypeAsString());
   }
-}
-
-repose::Points ToPoints(vtkPoints* points)
-{
-  repose::Points P(points ? points->GetNumberOfPoints() : 0, 3);
-  if (P.rows() == 0)
-  {
-    return P;
-  }
-  vtkDataArray* data = points->GetData();
-  switch (data->GetDataType())
-  {
-    vtkTemplateMacro(CopyCast(static_cast<const VTK_TT*>(data->GetVoidPointer(0)),
-      static_cast<std::size_t>(P.size()), P.data()));
-  }
-  return P;
-}
-
-repose::Tets ToTets(vtkUnstructuredGrid* mesh, const char* what)
-{
-  const vtkIdType n = mesh->GetNumberOfCells();
-  repose::Tets T(n, 4);
-  vtkIdType npts;
-  const vtkIdType* pts;
-  for (vtkIdType c = 0; c < n; ++c)
-  {
-    if (mesh->GetCellType(c) != VTK_TETRA)
-    {
-      throw std::invalid_argument(std::string(what) + " cell " + std::to_string(c) +
-        " is not a tetrahedron; pass a tet mesh (e.g. from vtkReposeBodyMesher)");
-    }
-    mesh->GetCellPoints(c, npts, pts);
-    for (int a = 0; a < 4; ++a)
-    {
-      T(c, a) = static_cast<int>(pts[a]);
-    }
-  }
-  return T;
 }
 
 // Rest grid from pipeline information (voxel of extent start is the grid's first voxel).
@@ -251,7 +214,7 @@ int vtkReposePosedVolume::RequestInformation(
   {
     const repose::ImageGrid rest = GridFromInfo(ext, origin, spacing, direction);
     const repose::ImageGrid out =
-      repose::posedOutputGrid(rest, ToPoints(posed->GetPoints()),
+      repose::posedOutputGrid(rest, repose_vtk::ToPoints(posed->GetPoints()),
         GridOptions(rest, this->PaddingVoxels, this->ExtrapolationDistance, this->MaxVoxels));
     GridToArrays(out, ext, origin, spacing, direction);
     std::copy(ext, ext + 6, this->FullOutputExtent);
@@ -333,7 +296,7 @@ int vtkReposePosedVolume::RequestData(
     if (in.TetsCells != cells || in.TetsTime != cellsTime || in.TetsCount != restMesh->GetNumberOfCells())
     {
       in.TetsCells = nullptr;
-      in.Tets = ToTets(restMesh, "rest mesh");
+      in.Tets = repose_vtk::ToTets(restMesh, "rest mesh");
       in.TetsCells = cells;
       in.TetsTime = cellsTime;
       in.TetsCount = restMesh->GetNumberOfCells();
@@ -342,12 +305,12 @@ int vtkReposePosedVolume::RequestData(
     vtkPoints* restPoints = restMesh->GetPoints();
     if (in.RestPoints != restPoints || !restPoints || in.RestPointsTime != restPoints->GetMTime())
     {
-      in.RestNodes = ToPoints(restPoints);
+      in.RestNodes = repose_vtk::ToPoints(restPoints);
       in.RestPoints = restPoints;
       in.RestPointsTime = restPoints ? restPoints->GetMTime() : 0;
     }
     const repose::Points& restNodes = in.RestNodes;
-    const repose::Points posedNodes = ToPoints(posedMesh->GetPoints());
+    const repose::Points posedNodes = repose_vtk::ToPoints(posedMesh->GetPoints());
     const repose::ImageGrid outGrid = repose::posedOutputGrid(
       rest, posedNodes, GridOptions(rest, this->PaddingVoxels, this->ExtrapolationDistance, this->MaxVoxels));
     int full[6];
