@@ -45,8 +45,12 @@ template <class Reader>
 vtkSmartPointer<vtkPolyData> runReader(const std::string& path) {
   auto reader = vtkSmartPointer<Reader>::New();
   reader->SetFileName(path.c_str());
-  reader->GlobalWarningDisplayOff();
+  // Silenced while it reads, then restored: the flag is global, and the filters' errors after it must
+  // still reach their observers (updateOrThrow's one-line messages).
+  const int display = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
   reader->Update();
+  vtkObject::SetGlobalWarningDisplay(display);
   auto mesh = vtkSmartPointer<vtkPolyData>::New();
   if (reader->GetOutput()) mesh->ShallowCopy(reader->GetOutput());
   return mesh;

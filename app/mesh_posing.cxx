@@ -52,18 +52,6 @@ std::string safeStem(const std::string& path) {
   return stem.empty() ? "mesh" : stem;
 }
 
-// Runs a filter; its error becomes "PATH: what (the filter's message)".
-void updateOrThrowFor(vtkAlgorithm* filter, const std::string& path, const std::string& what) {
-  try {
-    updateOrThrow(filter, what);
-  } catch (const std::runtime_error& e) {
-    std::string detail = e.what();
-    const std::string prefix = what + " failed: ";
-    if (detail.compare(0, prefix.size(), prefix) == 0) detail = detail.substr(prefix.size());
-    throw std::runtime_error(path + ": " + what + " (" + detail + ")");
-  }
-}
-
 // The binding as the filters carry it: point data BoundTet and BoundWeights on a copy of `rest`.
 vtkSmartPointer<vtkPolyData> withBinding(vtkPolyData* rest, const Binding& binding) {
   const vtkIdType n = vtkIdType(binding.tet.size());

@@ -1,5 +1,7 @@
 #include "repose_pipeline.h"
 
+#include <optional>
+
 #include "mesh_file_claims.h"
 #include "mesh_io.h"
 #include "json_text.h"
@@ -383,13 +385,23 @@ void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImage
                              describeGrid(image) + " vs " + describeGrid(labels) + ")");
 }
 
-void updateOrThrow(vtkAlgorithm* filter, const std::string& what) {
+std::optional<std::string> updateFilter(vtkAlgorithm* filter) {
   auto capture = vtkSmartPointer<ErrorCapture>::New();
   const unsigned long tag = filter->AddObserver(vtkCommand::ErrorEvent, capture);
   const int ok = filter->GetExecutive()->Update();
   filter->RemoveObserver(tag);
-  if (!ok || !capture->last.empty())
-    throw std::runtime_error(what + " failed" + (capture->last.empty() ? std::string() : ": " + capture->last));
+  if (ok && capture->last.empty()) return std::nullopt;
+  return capture->last;
+}
+
+void updateOrThrow(vtkAlgorithm* filter, const std::string& what) {
+  if (const auto error = updateFilter(filter))
+    throw std::runtime_error(what + " failed" + (error->empty() ? std::string() : ": " + *error));
+}
+
+void updateOrThrowFor(vtkAlgorithm* filter, const std::string& file, const std::string& what) {
+  if (const auto error = updateFilter(filter))
+    throw std::runtime_error(file + ": " + what + (error->empty() ? std::string(" failed") : " (" + *error + ")"));
 }
 
 Pipeline::Pipeline() = default;

@@ -4,6 +4,7 @@
 // directory; posing re-runs only skinning, surface deformation and resampling.
 #include <functional>
 #include <stdexcept>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,8 +63,12 @@ void writeImage(vtkImageData* image, const std::string& path);
 void writeLabelImage(vtkImageData* labels, const std::string& path);
 void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path);
 void writeSurfaces(vtkPolyData* surfaces, const std::string& path);
+/// Runs a VTK filter: nothing when it ran, its own error message ("" when it gave none) when it failed.
+std::optional<std::string> updateFilter(vtkAlgorithm* filter);
 /// Runs a VTK filter; throws std::runtime_error "`what` failed: <the filter's own error>" on failure.
 void updateOrThrow(vtkAlgorithm* filter, const std::string& what);
+/// Same, for a filter working on one file: throws "FILE: what (<the filter's own error>)".
+void updateOrThrowFor(vtkAlgorithm* filter, const std::string& file, const std::string& what);
 /// Throws std::runtime_error "LABEL_FILE and IMAGE_FILE are on different grids (...)".
 void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
                    const std::string& imageName);
@@ -165,6 +170,7 @@ public:
   vtkUnstructuredGrid* restMesh() const { return restMesh_; }
   vtkPolyData* restSurfaces() const { return restSurfaces_; }
   vtkImageData* restLabels() const { return restLabels_; }
+  vtkImageData* restImage() const { return restImage_; }  ///< null without a rest image
   const std::string& skeletonJson() const { return skeletonJson_; }
   const std::string& labelsExtension() const { return labelsExtension_; }
 

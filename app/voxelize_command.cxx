@@ -15,8 +15,7 @@
 #include <vtkCellArray.h>
 #include <vtkIdList.h>
 #include <vtkImageData.h>
-#include <vtkIntArray.h>
-#include <vtkMatrix3x3.h>
+#include <vtkPoints.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
@@ -25,14 +24,12 @@
 #include "atomic_outputs.h"
 #include "cli_options.h"
 #include "output_guard.h"
-#include "auto_rig.h"
-#include "label_table.h"
 #include "mesh_io.h"
+#include "mesh_topology.h"
 #include "mesh_voxelizer.h"
-#include "ReposeImageConversion.h"
 #include "repose_pipeline.h"
-#include "skeleton.h"
-#include "array_names.h"
+#include "vtkReposeAutoRig.h"
+#include "vtkReposeMeshVoxelizer.h"
 
 namespace repose {
 
@@ -153,19 +150,31 @@ TriangleMesh readTriangles(const std::string& path, double unitMm) {
   return m;
 }
 
-ImageGrid gridOf(vtkImageData* image) {
-  ImageGrid g;
-  int ext[6];
-  image->GetExtent(ext);
-  g.dims = {ext[1] - ext[0] + 1, ext[3] - ext[2] + 1, ext[5] - ext[4] + 1};
-  double origin[3];
-  image->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
-  for (int r = 0; r < 3; ++r) {
-    g.origin[r] = origin[r];
-    g.spacing[r] = image->GetSpacing()[r];
-    for (int c = 0; c < 3; ++c) g.direction(r, c) = image->GetDirectionMatrix()->GetElement(r, c);
+/// The triangles as the voxelizer filter takes them (double points, so nothing is rounded).
+vtkSmartPointer<vtkPolyData> toPolyData(const TriangleMesh& m) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(m.V.rows());
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) points->SetPoint(i, m.V(i, 0), m.V(i, 1), m.V(i, 2));
+  auto polys = vtkSmartPointer<vtkCellArray>::New();
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+    const vtkIdType ids[3] = {m.F(f, 0), m.F(f, 1), m.F(f, 2)};
+    polys->InsertNextCell(3, ids);
   }
-  return g;
+  auto mesh = vtkSmartPointer<vtkPolyData>::New();
+  mesh->SetPoints(points);
+  mesh->SetPolys(polys);
+  return mesh;
+}
+
+/// One input of the voxelizer filter: its surface, label name, role and source (for messages).
+void addPart(vtkReposeMeshVoxelizer* voxelizer, const TriangleMesh& mesh, const std::string& name, int role,
+             const std::string& source) {
+  const int index = voxelizer->GetNumberOfInputConnections(0);
+  voxelizer->AddInputData(0, toPolyData(mesh));
+  voxelizer->SetPartName(index, name.c_str());
+  voxelizer->SetPartRole(index, role);
+  voxelizer->SetPartSource(index, source.c_str());
 }
 
 /// labels.nii.gz -> labels.tsv beside it.
@@ -228,17 +237,14 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   for (const auto& [opt, value] : a.repeated) nameAndFile(opt, value);  // usage errors before any reading
 
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<VoxelizePart> parts;
-  {
-    VoxelizePart skin;
-    skin.name = a.single.count("skin-name") ? a.single.at("skin-name") : "soft_tissue";
-    skin.source = skinPath;
-    skin.role = VoxelizeRole::Skin;
-    TriangleMesh m = readTriangles(skinPath, unitMm);
-    skin.V = std::move(m.V);
-    skin.F = std::move(m.F);
-    parts.push_back(std::move(skin));
-  }
+  auto voxelizer = vtkSmartPointer<vtkReposeMeshVoxelizer>::New();
+  voxelizer->SetVoxelSize(options.voxelMm);
+  voxelizer->SetPaddingVoxels(options.padVoxels);
+  voxelizer->SetMaxVoxels(double(options.maxVoxels));
+  voxelizer->SetMaxMarrowRadius(options.maxMarrowRadiusMm);
+  voxelizer->SetHollowBones(options.hollowBones);
+  addPart(voxelizer, readTriangles(skinPath, unitMm), a.single.count("skin-name") ? a.single.at("skin-name") : "soft_tissue",
+          vtkReposeMeshVoxelizer::Skin, skinPath);
   for (const auto& [opt, value] : a.repeated) {
     const auto [name, file] = nameAndFile(opt, value);
     TriangleMesh m = readTriangles(file, unitMm);
@@ -249,70 +255,55 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
       } catch (const std::invalid_argument& e) {
         throw std::runtime_error(file + ": " + e.what());
       }
-      for (std::size_t i = 0; i < pieces.size(); ++i) {
-        VoxelizePart p;
-        p.name = name + "_" + std::to_string(i + 1);
-        p.source = file + " (piece " + std::to_string(i + 1) + " of " + std::to_string(pieces.size()) + ")";
-        p.role = VoxelizeRole::Bone;
-        p.V = std::move(pieces[i].V);
-        p.F = std::move(pieces[i].F);
-        parts.push_back(std::move(p));
-      }
+      for (std::size_t i = 0; i < pieces.size(); ++i)
+        addPart(voxelizer, pieces[i], name + "_" + std::to_string(i + 1), vtkReposeMeshVoxelizer::Bone,
+                file + " (piece " + std::to_string(i + 1) + " of " + std::to_string(pieces.size()) + ")");
       std::cout << "voxelize: " << file << ": " << pieces.size() << " pieces, bones " << name << "_1.." << name << "_"
                 << pieces.size() << "\n";
       continue;
     }
-    VoxelizePart p;
-    p.name = name;
-    p.source = file;
-    p.role = opt == "bone" ? VoxelizeRole::Bone : VoxelizeRole::Tissue;
-    p.V = std::move(m.V);
-    p.F = std::move(m.F);
-    parts.push_back(std::move(p));
+    addPart(voxelizer, m, name, opt == "bone" ? vtkReposeMeshVoxelizer::Bone : vtkReposeMeshVoxelizer::Tissue, file);
   }
   const double readSeconds = seconds(t0);
 
-  ImageGrid grid;
-  if (hasReference) grid = gridOf(readIntensityImage(a.single.at("reference")));
-  LabelVoxelization result;
-  try {
-    result = voxelizeLabels(parts, grid, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(e.what());
-  }
-  std::cout << "voxelize: " << result.text();
+  if (hasReference) voxelizer->SetReferenceImage(readIntensityImage(a.single.at("reference")));
+  // The voxelizer's messages name the surface at fault.
+  if (const auto error = updateFilter(voxelizer))
+    throw std::runtime_error(error->empty() ? outPath + ": voxelizing failed" : *error);
+  std::cout << "voxelize: " << voxelizer->GetReport();
+  const double voxelizeSeconds = voxelizer->GetSeconds();
 
-  LabelVolume labels = std::move(result.labels);
-  LabelTable table = result.table;
+  vtkSmartPointer<vtkImageData> labels = vtkSmartPointer<vtkImageData>::New();
+  labels->ShallowCopy(voxelizer->GetOutput());
+  std::string tableTsv = voxelizer->GetLabelTableTSV();
+  voxelizer = nullptr;  // the labels image holds the only copy of the voxels from here on
   std::string skeletonJson;
   if (a.single.count("skeleton-out")) {
-    AutoRigOptions rigOptions;
-    rigOptions.maxGapMm = maxGap;
-    AutoRigResult rig;
-    try {
-      rig = autoRig(labels, table, rigOptions);
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(outPath + ": automatic skeleton: " + e.what());
-    }
-    std::cout << rig.report.text();
-    if (rig.skeleton.size() < 2)
-      throw std::runtime_error(outPath + ": the automatic skeleton found " + std::to_string(rig.skeleton.size()) +
+    auto rig = vtkSmartPointer<vtkReposeAutoRig>::New();
+    rig->SetInputData(labels);
+    rig->SetLabelTableTSV(tableTsv.c_str());
+    rig->SetLabelTableName("the voxelized surfaces' names");
+    rig->SetMaxGapMm(maxGap);
+    updateOrThrowFor(rig, outPath, "automatic skeleton");
+    std::cout << rig->GetReport();
+    if (rig->GetNumberOfJoints() < 2)
+      throw std::runtime_error(outPath + ": the automatic skeleton found " + std::to_string(rig->GetNumberOfJoints()) +
                                " joint(s): name the bones as the rig knows them (femur_left, tibia_left, hip_left, "
                                "humerus_right, ...) or write skeleton.json by hand");
-    labels = std::move(rig.labels);
-    table = rig.table;
-    skeletonJson = skeletonToJson(rig.skeleton);
+    labels = vtkSmartPointer<vtkImageData>::New();
+    labels->ShallowCopy(rig->GetOutput());
+    tableTsv = rig->GetOutputLabelTableTSV();
+    skeletonJson = rig->GetSkeletonJSON();
   }
+  int dims[3];
+  labels->GetDimensions(dims);
 
   // Both outputs staged, then moved into place together.
   const std::filesystem::path out(outPath);
   AtomicOutputs files(out.has_parent_path() ? out.parent_path().string() : ".");
-  {
-    vtkSmartPointer<vtkImageData> image = repose_vtk::ToImage<vtkIntArray>(labels, repose::arrays::kLabels);
-    std::vector<std::int32_t>().swap(labels.data);  // the image holds the only copy while it is written
-    writeLabelImage(image, files.stage(out.filename().string()));
-  }
-  writeTextFile(files.stage(std::filesystem::path(tablePathFor(outPath)).filename().string()), labelTableToTsv(table));
+  writeLabelImage(labels, files.stage(out.filename().string()));
+  labels = nullptr;
+  writeTextFile(files.stage(std::filesystem::path(tablePathFor(outPath)).filename().string()), tableTsv);
   std::unique_ptr<AtomicOutputs> skeletonFiles;  // only when the skeleton goes to another folder
   if (!skeletonJson.empty()) {
     namespace fs = std::filesystem;
@@ -328,10 +319,10 @@ int runVoxelizeCommand(int argc, char** argv, int first) {
   }
   files.commit();
   if (skeletonFiles) skeletonFiles->commit();
-  std::cout << "voxelize: " << labels.grid.dims[0] << "x" << labels.grid.dims[1] << "x" << labels.grid.dims[2]
+  std::cout << "voxelize: " << dims[0] << "x" << dims[1] << "x" << dims[2]
             << " voxels written to " << outPath << " and " << tablePathFor(outPath)
             << (skeletonJson.empty() ? std::string() : " (skeleton: " + a.single.at("skeleton-out") + ")")
-            << "; reading " << readSeconds << " s, voxelizing " << result.seconds << " s\n";
+            << "; reading " << readSeconds << " s, voxelizing " << voxelizeSeconds << " s\n";
   return 0;
 }
 

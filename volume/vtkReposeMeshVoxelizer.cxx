@@ -172,8 +172,19 @@ int vtkReposeMeshVoxelizer::RequestInformation(
       repose::MeshVertices V;
       repose::MeshTriangles F;
       ToTriangles(mesh, V, F);
-      grid = repose::gridFittingPoints(
-        V, this->VoxelSize, this->PaddingVoxels, static_cast<std::size_t>(this->MaxVoxels));
+      try
+      {
+        grid = repose::gridFittingPoints(
+          V, this->VoxelSize, this->PaddingVoxels, static_cast<std::size_t>(this->MaxVoxels));
+      }
+      catch (const std::invalid_argument& e)
+      {
+        // Named as the core names it in RequestData: the skin's source, else its label name.
+        auto source = this->PartSources.find(skin);
+        const std::string where =
+          source != this->PartSources.end() && !source->second.empty() ? source->second : this->GetPartName(skin);
+        throw std::invalid_argument(where + ": " + e.what());
+      }
     }
   }
   catch (const std::exception& e)
