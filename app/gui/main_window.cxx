@@ -48,7 +48,7 @@
 #include "slice_views.h"
 #include "start_page.h"
 #include "vtkReposeCorotationalRelax.h"
-#include "vtkReposePosedVolume.h"
+#include "posed_volume_sampler.h"
 
 namespace repose {
 namespace {
@@ -528,6 +528,7 @@ void MainWindow::installCase(const OpenResult& result) {
   stopRelaxation();
   animation_->pause();
   ++caseGeneration_;
+  sliceSampler_.reset();
   pipeline_ = result.pipeline;
   table_ = result.table;
   restImage_ = result.image;
@@ -574,6 +575,7 @@ void MainWindow::dropCase() {
   sliceWatcher_.waitForFinished();
   stopRelaxation();
   ++caseGeneration_;
+  sliceSampler_.reset();
   pipeline_.reset();
   restImage_ = nullptr;
   scene_->clearCase();
@@ -683,28 +685,24 @@ void MainWindow::startSliceUpdate() {
   slicesDirty_ = false;
   const Pose pose = controller_.pose();
   const bool rest = pose.rotations.empty() && pose.translation.isZero() && !relaxed_;
-  auto labels = vtkSmartPointer<vtkImageData>::New();
-  labels->ShallowCopy(pipeline_->restLabels());
-  auto image = restImage_ ? vtkSmartPointer<vtkImageData>::New() : nullptr;
-  if (image) image->ShallowCopy(restImage_);
-  auto restMesh = vtkSmartPointer<vtkUnstructuredGrid>::New();
-  restMesh->ShallowCopy(pipeline_->restMesh());
-  vtkSmartPointer<vtkUnstructuredGrid> posed;
-  if (!rest) {
-    vtkUnstructuredGrid* current = nullptr;
-    try {
-      current = pipeline_->posedMesh();
-    } catch (const std::exception&) {
-      return;
+  // The pipeline's posed nodes change with the next pose: the worker gets its own copy.
+  vtkSmartPointer<vtkPoints> posedNodes;
+  std::shared_ptr<PosedVolumeSampler> sampler;
+  try {
+    if (!rest) {
+      posedNodes = vtkSmartPointer<vtkPoints>::New();
+      posedNodes->DeepCopy(pipeline_->posedMesh()->GetPoints());
     }
-    posed = vtkSmartPointer<vtkUnstructuredGrid>::New();
-    posed->ShallowCopy(current);
-    auto points = vtkSmartPointer<vtkPoints>::New();
-    points->DeepCopy(current->GetPoints());
-    posed->SetPoints(points);
+    if (!sliceSampler_)
+      sliceSampler_ = std::make_shared<PosedVolumeSampler>(pipeline_->restLabels(), restImage_, pipeline_->restMesh());
+    sampler = sliceSampler_;
+  } catch (const std::exception&) {
+    return;
   }
   const int generation = caseGeneration_;
   const Eigen::Vector3d root = rootCentre();
+  double background = 0;
+  if (restImage_) background = restImage_->GetPointData()->GetScalars()->GetRange()[0];
   sliceLabel_->setText("Updating the slice views…");
   sliceWatcher_.setFuture(QtConcurrent::run([=]() -> SliceResult {
     SliceResult r;
@@ -712,28 +710,10 @@ void MainWindow::startSliceUpdate() {
     r.root = root;
     const auto t0 = Clock::now();
     try {
-      auto resample = [&](vtkImageData* volume, bool nearest, double background) {
-        auto filter = vtkSmartPointer<vtkReposePosedVolume>::New();
-        filter->SetInputData(0, volume);
-        filter->SetRestMeshData(restMesh);
-        filter->SetPosedMeshData(posed);
-        if (nearest)
-          filter->SetInterpolationToNearest();
-        else
-          filter->SetInterpolationToLinear();
-        filter->SetBackgroundValue(background);
-        updateOrThrow(filter, "posed volume for the slice views");
-        auto out = vtkSmartPointer<vtkImageData>::New();
-        out->ShallowCopy(filter->GetOutput());
-        return out;
-      };
-      double range[2] = {0, 0};
-      if (image) image->GetPointData()->GetScalars()->GetRange(range);
-      r.labels = rest ? labels : resample(labels, true, 0);
-      if (image) r.image = rest ? image : resample(image, false, range[0]);
+      const PosedVolumeSampler::Volumes v = sampler->sample(posedNodes);
       // In patient coordinates for the slice views (off the UI thread: it may reorder every voxel).
-      r.labels = lpsAlignedImage(r.labels, true);
-      r.image = lpsAlignedImage(r.image, false, range[0]);
+      r.labels = lpsAlignedImage(v.labels, true);
+      r.image = lpsAlignedImage(v.image, false, background);
     } catch (const std::exception& e) {
       r.error = e.what();
     }

@@ -34,6 +34,7 @@ class QStackedWidget;
 namespace repose {
 
 class AnimationPanel;
+class PosedVolumeSampler;
 class JointPanel;
 class LabelLegend;
 class Pipeline;
@@ -170,6 +171,7 @@ private:
   LabelTable table_;
   std::vector<int> boneLabels_;
   vtkSmartPointer<vtkImageData> restImage_;
+  std::shared_ptr<PosedVolumeSampler> sliceSampler_;  // the case's posed volumes for the slice views
   QString title_;
   PreprocessWorker* worker_ = nullptr;
   FrameTiming timing_;

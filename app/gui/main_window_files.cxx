@@ -62,7 +62,9 @@ bool MainWindow::loadRestImage(const QString& path) {
     if (!pipeline_) throw std::runtime_error("no case open");
     auto image = readIntensityImage(path.toStdString());
     pipeline_->setRestImage(image, path.toStdString());
+    sliceWatcher_.waitForFinished();
     restImage_ = image;
+    sliceSampler_.reset();  // the next slice update samples the new image
     updateActions();
     requestSliceUpdate();
   });
