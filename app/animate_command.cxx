@@ -150,6 +150,150 @@ double parseVoxelCount(const std::string& text) {
   return v;
 }
 
+/// frames.csv: one row per frame with the body's and each label's volume ratio, the posing time, the
+/// relaxation's figures (with --relax) and the quality figures.
+class FramesTable {
+ public:
+  FramesTable(const std::map<int, long>& restLabelCounts, bool relaxing, bool volumes)
+      : restCounts_(restLabelCounts), relaxing_(relaxing), volumes_(volumes) {
+    csv_ << "frame,time_s,body_volume_ratio,posing_ms";
+    for (const auto& [label, count] : restCounts_) csv_ << ",label_" << label << "_ratio";
+    if (relaxing_)
+      csv_ << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start,"
+              "strained_region_nodes,strained_region_newton_iterations,pinched_nodes";
+    csv_ << ",mesh_inverted_tets,max_stretch,stretched_ml" << (volumes_ ? ",contested_bone_voxels" : "") << "\n";
+  }
+
+  /// The row of frame `f`; `labels` is its posed label volume (null without --volumes).
+  void add(Pipeline& pipeline, int f, double time, double bodyRatio, double posingSeconds, vtkImageData* labels,
+           const DeformationStats& stats) {
+    csv_ << f << "," << time << "," << bodyRatio << "," << posingSeconds * 1e3;
+    if (labels) {
+      const auto counts = labelCounts(labels);
+      for (const auto& [label, count] : restCounts_) {
+        auto it = counts.find(label);
+        csv_ << "," << double(it == counts.end() ? 0 : it->second) / double(count);
+      }
+    }
+    if (vtkReposeCorotationalRelax* relax = relaxing_ ? pipeline.relaxation() : nullptr)
+      csv_ << "," << relax->GetLastRelaxTime() << "," << relax->GetNewtonIterations() << ","
+           << relax->GetCGIterations() << "," << relax->GetInvertedAfter() << "," << relax->GetContinuationSteps()
+           << "," << int(relax->GetWarmStarted()) << "," << relax->GetStrainedRegionNodes() << ","
+           << relax->GetStrainedRegionNewtonIterations() << "," << relax->GetPinchedNodes();
+    csv_ << "," << stats.invertedTets << "," << stats.maxStretch << "," << stats.stretchedVolumeMm3 / 1000.0;
+    if (volumes_) csv_ << "," << pipeline.posedLabelStats().contestedBoneVoxels;
+    csv_ << "\n";
+  }
+
+  std::string text() const { return csv_.str(); }
+
+ private:
+  std::map<int, long> restCounts_;
+  bool relaxing_, volumes_;
+  std::ostringstream csv_;
+};
+
+/// Each frame's files in frames/ (mesh, surfaces, the posed meshes, the volumes) and their entries
+/// in animation.pvd: part 0 the mesh, 1 the surfaces, then the meshes, then the labels and the CT
+/// when they are .vti (ParaView reads no other volume format from a .pvd).
+class FrameFiles {
+ public:
+  FrameFiles(AtomicOutputs& out, const MeshPoser* meshes, std::string volumeExt, std::string imageExt)
+      : out_(out), meshes_(meshes), volumeExt_(std::move(volumeExt)), imageExt_(std::move(imageExt)),
+        volumePart_(2 + int(meshes ? meshes->meshes().size() : 0)) {}
+
+  void write(int f, double time, vtkUnstructuredGrid* mesh, vtkPolyData* surfaces, vtkImageData* labels,
+             vtkImageData* image) {
+    add(time, 0, numbered("frames/mesh_", f, ".vtu"), [&](const std::string& path) { writeMesh(mesh, path); });
+    add(time, 1, numbered("frames/surfaces_", f, ".vtp"),
+        [&](const std::string& path) { writeSurfaces(surfaces, path); });
+    for (std::size_t i = 0; meshes_ && i < meshes_->meshes().size(); ++i) {
+      const std::string stem = std::filesystem::path(meshes_->meshes()[i].path).stem().string();
+      add(time, int(2 + i), numbered("frames/" + stem + "_", f, ".vtp"),
+          [&](const std::string& path) { writeSurfaces(meshes_->pose(i, mesh), path); });
+    }
+    const bool inPvd = volumeExt_ == ".vti";
+    if (labels)
+      add(time, inPvd ? volumePart_ : -1, numbered("frames/labels_", f, volumeExt_),
+          [&](const std::string& path) { writeLabelImage(labels, path); });
+    if (image)
+      add(time, inPvd ? volumePart_ + 1 : -1, numbered("frames/image_", f, imageExt_),
+          [&](const std::string& path) { writeImage(image, path); });
+  }
+
+  const std::vector<PvdEntry>& entries() const { return entries_; }
+
+ private:
+  static std::string numbered(const std::string& prefix, int f, const std::string& ext) {
+    char digits[16];
+    std::snprintf(digits, sizeof(digits), "%05d", f);
+    return prefix + digits + ext;
+  }
+  /// Writes `name` through the staged outputs; part < 0: not listed in animation.pvd.
+  template <class Write>
+  void add(double time, int part, const std::string& name, Write write) {
+    write(out_.stage(name));
+    if (part >= 0) entries_.push_back({time, part, name});
+  }
+
+  AtomicOutputs& out_;
+  const MeshPoser* meshes_;
+  std::string volumeExt_, imageExt_;
+  int volumePart_;
+  std::vector<PvdEntry> entries_;
+};
+
+/// The posed volumes of the frame; a volume too large for --max-voxels gets the ways out.
+void posedVolumesOf(Pipeline& pipeline, bool volumes, int f, const std::string& bvhPath, vtkImageData*& labels,
+                    vtkImageData*& image) {
+  try {
+    labels = volumes ? pipeline.posedLabels() : nullptr;
+    image = pipeline.posedImage();
+  } catch (const std::runtime_error& e) {
+    const bool tooLarge = std::string(e.what()).find("posed volume would have") != std::string::npos;
+    throw std::runtime_error(bvhPath + ": frame " + std::to_string(f) + ": " + e.what() +
+                             (tooLarge ? "; keep the root in place (--no-root-motion), check the clip's units "
+                                         "(--unit-mm) or raise --max-voxels"
+                                       : ""));
+  }
+}
+
+/// Posing times and the largest posed volume over the frames, and the frames the quality check flagged.
+struct AnimationSummary {
+  int written = 0;
+  double totalPosing = 0, worstPosing = 0, largestVolume = 0;
+  int largestDims[3] = {0, 0, 0};
+  std::vector<std::pair<int, PoseQuality>> warned;
+
+  void addFrame(double posingSeconds, std::initializer_list<vtkImageData*> frameVolumes) {
+    ++written;
+    totalPosing += posingSeconds;
+    worstPosing = std::max(worstPosing, posingSeconds);
+    for (vtkImageData* volume : frameVolumes)
+      if (volume && double(volume->GetNumberOfPoints()) > largestVolume) {
+        largestVolume = double(volume->GetNumberOfPoints());
+        volume->GetDimensions(largestDims);
+      }
+  }
+
+  void print(const std::string& bvhPath, const std::string& outDir, bool volumes) const {
+    std::cout << "animate: " << written << " frames of " << bvhPath << " written to " << outDir << " (posing "
+              << std::fixed << std::setprecision(1) << 1e3 * totalPosing / std::max(written, 1) << " ms mean, "
+              << 1e3 * worstPosing << " ms worst per frame" << (volumes ? ", with the label volume" : "") << ")\n";
+    if (largestVolume > 0)
+      std::cout << "animate: largest posed volume " << largestDims[0] << " x " << largestDims[1] << " x "
+                << largestDims[2] << " = " << std::setprecision(3) << largestVolume / 1e6 << " M voxels\n";
+    // The frames that went wrong, the first few in full (every frame's figures are in frames.csv).
+    std::cout << "animate: quality flagged " << warned.size() << " of " << written << " frames (frames.csv: "
+              << "mesh_inverted_tets, max_stretch, stretched_ml" << (volumes ? ", contested_bone_voxels" : "") << ")\n";
+    const std::size_t shown = std::min<std::size_t>(warned.size(), 3);
+    for (std::size_t i = 0; i < shown; ++i)
+      for (const std::string& w : warned[i].second.warnings)
+        std::cerr << "warning: frame " << warned[i].first << ": " << w << "\n";
+    if (warned.size() > shown) std::cerr << "warning: ... and " << warned.size() - shown << " more frames\n";
+  }
+};
+
 }  // namespace
 
 int runAnimateCommand(int argc, char** argv, int first) {
@@ -199,31 +343,16 @@ int runAnimateCommand(int argc, char** argv, int first) {
     throw UsageError("--format sets the format of the frames' volumes: it needs --volumes or --image");
   const std::string volumeExt = o.has("format") ? normalizedFormat(o.get("format")) : ".nii.gz";
   if (o.has("format")) imageExt = volumeExt;
-  const bool volumesInPvd = volumeExt == ".vti";
 
   std::unique_ptr<MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
-  const int volumePart = 2 + int(meshes ? meshes->meshes().size() : 0);  // after the mesh, surfaces and meshes
   AtomicOutputs out(outDir);
   makeDirectories(out.stage("frames"));
   if (volumes) writeLabelTables(pipeline, out, "frames/labels");
   const double restVolume = pipeline.restMeshVolume();
-  std::map<int, long> restCounts;
-  if (volumes) restCounts = labelCounts(pipeline.restLabels());
-  std::vector<PvdEntry> entries;
-  std::ostringstream csv;
-  csv << "frame,time_s,body_volume_ratio,posing_ms";
-  for (const auto& [label, count] : restCounts) csv << ",label_" << label << "_ratio";
-  const bool relaxing = o.has("relax");
-  if (relaxing)
-    csv << ",relax_s,newton_iterations,cg_iterations,inverted_tets,continuation_steps,warm_start,"
-           "strained_region_nodes,strained_region_newton_iterations,pinched_nodes";
-  csv << ",mesh_inverted_tets,max_stretch,stretched_ml" << (volumes ? ",contested_bone_voxels" : "") << "\n";
-  std::vector<std::pair<int, PoseQuality>> warned;  // frames with warnings
-  int written = 0;
-  double totalPosing = 0, worstPosing = 0, largestVolume = 0;
-  int largestDims[3] = {0, 0, 0};
+  FramesTable table(volumes ? labelCounts(pipeline.restLabels()) : std::map<int, long>(), o.has("relax"), volumes);
+  FrameFiles files(out, meshes.get(), volumeExt, imageExt);
+  AnimationSummary summary;
   for (int f = range.start; f < range.stop; f += range.step) {
-    char name[64];
     pipeline.setPose(retargeter->pose(f));
     if (!fidelity.methods.empty())
       fidelity.addFrame(pipeline, f, o.get("skinning", "dqs"), relaxation.enabled, relaxation.poisson,
@@ -232,92 +361,28 @@ int runAnimateCommand(int argc, char** argv, int first) {
     const auto t0 = std::chrono::steady_clock::now();
     vtkUnstructuredGrid* mesh = pipeline.posedMesh();
     vtkPolyData* surfaces = pipeline.posedSurfaces();
-    vtkImageData* labels = nullptr;
-    vtkImageData* image = nullptr;
-    try {
-      labels = volumes ? pipeline.posedLabels() : nullptr;
-      image = pipeline.posedImage();
-    } catch (const std::runtime_error& e) {
-      const bool tooLarge = std::string(e.what()).find("posed volume would have") != std::string::npos;
-      throw std::runtime_error(bvhPath + ": frame " + std::to_string(f) + ": " + e.what() +
-                               (tooLarge ? "; keep the root in place (--no-root-motion), check the clip's units "
-                                           "(--unit-mm) or raise --max-voxels"
-                                         : ""));
-    }
-    for (vtkImageData* volume : {labels, image})
-      if (volume && double(volume->GetNumberOfPoints()) > largestVolume) {
-        largestVolume = double(volume->GetNumberOfPoints());
-        volume->GetDimensions(largestDims);
-      }
+    vtkImageData *labels = nullptr, *image = nullptr;
+    posedVolumesOf(pipeline, volumes, f, bvhPath, labels, image);
     const double posing = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    totalPosing += posing;
-    worstPosing = std::max(worstPosing, posing);
+    summary.addFrame(posing, {labels, image});
     const double time = f * motion.frameTime;
-    std::snprintf(name, sizeof(name), "frames/mesh_%05d.vtu", f);
-    writeMesh(mesh, out.stage(name));
-    entries.push_back({time, 0, name});
-    std::snprintf(name, sizeof(name), "frames/surfaces_%05d.vtp", f);
-    writeSurfaces(surfaces, out.stage(name));
-    entries.push_back({time, 1, name});
-    for (std::size_t i = 0; meshes && i < meshes->meshes().size(); ++i) {
-      std::snprintf(name, sizeof(name), "_%05d.vtp", f);
-      const std::string file = "frames/" + std::filesystem::path(meshes->meshes()[i].path).stem().string() + name;
-      writeSurfaces(meshes->pose(i, mesh), out.stage(file));
-      entries.push_back({time, int(2 + i), file});
-    }
-    csv << f << "," << time << "," << pipeline.posedMeshVolume() / restVolume << "," << posing * 1e3;
-    if (labels) {
-      std::snprintf(name, sizeof(name), "frames/labels_%05d", f);
-      writeLabelImage(labels, out.stage(name + volumeExt));
-      if (volumesInPvd) entries.push_back({time, volumePart, name + volumeExt});
-      const auto counts = labelCounts(labels);
-      for (const auto& [label, count] : restCounts) {
-        auto it = counts.find(label);
-        csv << "," << double(it == counts.end() ? 0 : it->second) / double(count);
-      }
-    }
-    if (image) {
-      std::snprintf(name, sizeof(name), "frames/image_%05d", f);
-      writeImage(image, out.stage(name + imageExt));
-      if (volumesInPvd) entries.push_back({time, volumePart + 1, name + imageExt});
-    }
-    if (vtkReposeCorotationalRelax* relax = relaxing ? pipeline.relaxation() : nullptr)
-      csv << "," << relax->GetLastRelaxTime() << ","
-          << relax->GetNewtonIterations() << ","
-          << relax->GetCGIterations() << ","
-          << relax->GetInvertedAfter() << ","
-          << relax->GetContinuationSteps() << "," << int(relax->GetWarmStarted()) << ","
-          << relax->GetStrainedRegionNodes() << "," << relax->GetStrainedRegionNewtonIterations() << ","
-          << relax->GetPinchedNodes();
+    files.write(f, time, mesh, surfaces, labels, image);
     const DeformationStats stats = pipeline.posedStats();
-    csv << "," << stats.invertedTets << "," << stats.maxStretch << "," << stats.stretchedVolumeMm3 / 1000.0;
-    if (volumes) csv << "," << pipeline.posedLabelStats().contestedBoneVoxels;
-    csv << "\n";
+    table.add(pipeline, f, time, pipeline.posedMeshVolume() / restVolume, posing, labels, stats);
     PoseQuality quality = poseQualityOf(pipeline, stats);
-    if (!quality.warnings.empty()) warned.emplace_back(f, std::move(quality));
-    ++written;
-    if (written % 10 == 0)
-      std::cout << "animate: " << progressLine(std::size_t(written), frameCount, std::chrono::duration<double>(std::chrono::steady_clock::now() - animateStart).count(), "frames")
+    if (!quality.warnings.empty()) summary.warned.emplace_back(f, std::move(quality));
+    if (summary.written % 10 == 0)
+      std::cout << "animate: "
+                << progressLine(std::size_t(summary.written), frameCount,
+                                std::chrono::duration<double>(std::chrono::steady_clock::now() - animateStart).count(),
+                                "frames")
                 << std::endl;
   }
-  writeTextFile(out.stage("animation.pvd"), pvdText(entries));
-  writeTextFile(out.stage("frames.csv"), csv.str());
+  writeTextFile(out.stage("animation.pvd"), pvdText(files.entries()));
+  writeTextFile(out.stage("frames.csv"), table.text());
   if (!fidelity.methods.empty()) fidelity.write(out);
   out.commit();
-  std::cout << "animate: " << written << " frames of " << bvhPath << " written to " << outDir << " (posing "
-            << std::fixed << std::setprecision(1) << 1e3 * totalPosing / std::max(written, 1) << " ms mean, "
-            << 1e3 * worstPosing << " ms worst per frame" << (volumes ? ", with the label volume" : "") << ")\n";
-  if (largestVolume > 0)
-    std::cout << "animate: largest posed volume " << largestDims[0] << " x " << largestDims[1] << " x " << largestDims[2]
-              << " = " << std::setprecision(3) << largestVolume / 1e6 << " M voxels\n";
-  // The frames that went wrong, the first few in full (every frame's figures are in frames.csv).
-  std::cout << "animate: quality flagged " << warned.size() << " of " << written << " frames (frames.csv: "
-            << "mesh_inverted_tets, max_stretch, stretched_ml" << (volumes ? ", contested_bone_voxels" : "") << ")\n";
-  const std::size_t shown = std::min<std::size_t>(warned.size(), 3);
-  for (std::size_t i = 0; i < shown; ++i)
-    for (const std::string& w : warned[i].second.warnings)
-      std::cerr << "warning: frame " << warned[i].first << ": " << w << "\n";
-  if (warned.size() > shown) std::cerr << "warning: ... and " << warned.size() - shown << " more frames\n";
+  summary.print(bvhPath, outDir, volumes);
   return 0;
 }
 

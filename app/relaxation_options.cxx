@@ -49,8 +49,6 @@ int valueOf(const Setting& s, const Options& o) {
   const std::string word = o.get(s.option, s.fallback);
   for (const auto& [name, value] : s.words)
     if (word == name) return value;
-  if (&s == &kVolume)  // refused as a bad value (exit code 1) in these words since it was added
-    throw std::runtime_error("unknown relaxation volume regions '" + word + "' (expected " + listed(s, ", ") + ")");
   throw UsageError("--" + std::string(s.option) + " must be " + listed(s, " or "));
 }
 

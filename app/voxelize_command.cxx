@@ -24,6 +24,7 @@
 #include "atomic_outputs.h"
 #include "cli_options.h"
 #include "output_guard.h"
+#include "ReposeMeshConversion.h"
 #include "mesh_io.h"
 #include "mesh_topology.h"
 #include "mesh_voxelizer.h"
@@ -132,21 +133,9 @@ std::pair<std::string, std::string> nameAndFile(const std::string& option, const
 TriangleMesh readTriangles(const std::string& path, double unitMm) {
   vtkSmartPointer<vtkPolyData> mesh = readSurfaceMesh(path);
   TriangleMesh m;
-  m.V.resize(mesh->GetNumberOfPoints(), 3);
-  for (vtkIdType i = 0; i < mesh->GetNumberOfPoints(); ++i) {
-    double p[3];
-    mesh->GetPoint(i, p);
-    m.V.row(i) << unitMm * p[0], unitMm * p[1], unitMm * p[2];
-  }
-  std::vector<int> tris;
-  vtkNew<vtkIdList> ids;
-  vtkCellArray* polys = mesh->GetPolys();
-  for (polys->InitTraversal(); polys->GetNextCell(ids);)
-    for (vtkIdType k = 1; k + 1 < ids->GetNumberOfIds(); ++k)
-      for (vtkIdType v : {ids->GetId(0), ids->GetId(k), ids->GetId(k + 1)}) tris.push_back(int(v));
-  if (tris.empty()) throw std::runtime_error(path + ": has no triangles");
-  m.F.resize(Eigen::Index(tris.size() / 3), 3);
-  std::copy(tris.begin(), tris.end(), m.F.data());
+  m.V = unitMm * repose_vtk::ToPoints(mesh->GetPoints());
+  m.F = repose_vtk::ToTriangleFans(mesh);
+  if (m.F.rows() == 0) throw std::runtime_error(path + ": has no triangles");
   return m;
 }
 

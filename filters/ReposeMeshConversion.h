@@ -5,7 +5,11 @@
 // Header-only and not wrapped: it exchanges core (Eigen) types. Coordinates are copied exactly
 // (float or double to double), so results do not depend on which route converted them.
 
+#include "vtkCellArray.h"
 #include "vtkCellType.h"
+#include "vtkIdList.h"
+#include "vtkNew.h"
+#include "vtkPolyData.h"
 #include "vtkDataArray.h"
 #include "vtkFloatArray.h"
 #include "vtkPoints.h"
@@ -14,6 +18,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "tet_mesh.h"
 
@@ -80,6 +85,27 @@ inline repose::Tets ToTets(vtkUnstructuredGrid* mesh, const char* what = "tet me
     }
   }
   return T;
+}
+
+/// The polygons of a surface as triangles (#F by 3 node ids): a polygon of n corners becomes the fan
+/// (0, k, k+1), k = 1..n-2, in cell order. Vertices and lines are skipped.
+inline repose::Triangles ToTriangleFans(vtkPolyData* surface)
+{
+  std::vector<int> tris;
+  vtkCellArray* polys = surface->GetPolys();
+  vtkNew<vtkIdList> ids;
+  for (polys->InitTraversal(); polys->GetNextCell(ids);)
+  {
+    for (vtkIdType k = 1; k + 1 < ids->GetNumberOfIds(); ++k)
+    {
+      tris.push_back(static_cast<int>(ids->GetId(0)));
+      tris.push_back(static_cast<int>(ids->GetId(k)));
+      tris.push_back(static_cast<int>(ids->GetId(k + 1)));
+    }
+  }
+  repose::Triangles F(static_cast<Eigen::Index>(tris.size() / 3), 3);
+  std::copy(tris.begin(), tris.end(), F.data());
+  return F;
 }
 
 /// Float vtkPoints holding P's rows (the type the skinning filter writes).

@@ -17,6 +17,7 @@
 #include "vtkPolyData.h"
 #include "vtkReposeSurfaceExtractor.h"
 #include "ReposeImageConversion.h"
+#include "ReposeMeshConversion.h"
 #include "vtkSmartPointer.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
@@ -51,13 +52,7 @@ double SecondsSince(Clock::time_point t)
 // Triangle surface -> core arrays; false when a cell is not a triangle.
 bool ToTriangles(vtkPolyData* surface, repose::Points& V, repose::Triangles& F)
 {
-  V.resize(surface->GetNumberOfPoints(), 3);
-  for (vtkIdType p = 0; p < surface->GetNumberOfPoints(); ++p)
-  {
-    double x[3];
-    surface->GetPoint(p, x);
-    V.row(p) << x[0], x[1], x[2];
-  }
+  V = repose_vtk::ToPoints(surface->GetPoints());
   vtkCellArray* polys = surface->GetPolys();
   F.resize(polys->GetNumberOfCells(), 3);
   vtkIdType row = 0;

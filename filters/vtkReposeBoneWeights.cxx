@@ -15,6 +15,7 @@
 #include "vtkUnsignedShortArray.h"
 #include "vtkUnstructuredGrid.h"
 
+#include "ReposeMeshConversion.h"
 #include "harmonic_weights.h"
 #include "skeleton.h"
 #include "array_names.h"
@@ -32,13 +33,7 @@ repose::TetMesh ToTetMesh(vtkUnstructuredGrid* grid)
 {
   repose::TetMesh mesh;
   const vtkIdType np = grid->GetNumberOfPoints(), nc = grid->GetNumberOfCells();
-  mesh.nodes.resize(np, 3);
-  for (vtkIdType i = 0; i < np; ++i)
-  {
-    double p[3];
-    grid->GetPoint(i, p);
-    mesh.nodes.row(i) << p[0], p[1], p[2];
-  }
+  mesh.nodes = repose_vtk::ToPoints(grid->GetPoints());
   mesh.tets.resize(nc, 4);
   auto it = vtk::TakeSmartPointer(grid->GetCells()->NewIterator());
   vtkIdType c = 0;

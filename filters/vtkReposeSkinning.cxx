@@ -17,6 +17,7 @@
 #include "ReposeWeightArrays.h"
 #include "pose.h"
 #include "skeleton.h"
+#include "ReposeMeshConversion.h"
 #include "skinning.h"
 #include "array_names.h"
 
@@ -39,13 +40,7 @@ struct vtkReposeSkinning::Internals
   void Convert(vtkUnstructuredGrid* input)
   {
     const vtkIdType np = input->GetNumberOfPoints();
-    repose::Points rest(np, 3);
-    for (vtkIdType i = 0; i < np; ++i)
-    {
-      double p[3];
-      input->GetPoint(i, p);
-      rest.row(i) << p[0], p[1], p[2];
-    }
+    const repose::Points rest = repose_vtk::ToPoints(input->GetPoints());
     repose::SparseWeights weights;
     std::vector<int> fixedBone;
     this->ConvertWeights(input, np, weights, fixedBone);

@@ -1,6 +1,7 @@
 #include "vtkReposeMeshVoxelizer.h"
 
 #include "ReposeImageConversion.h"
+#include "ReposeMeshConversion.h"
 
 #include "vtkCellArray.h"
 #include "vtkIdList.h"
@@ -31,28 +32,8 @@ namespace
 /// Points and polygons (fans of triangles) of a vtkPolyData as a core triangle soup.
 void ToTriangles(vtkPolyData* mesh, repose::MeshVertices& V, repose::MeshTriangles& F)
 {
-  const vtkIdType n = mesh->GetNumberOfPoints();
-  V.resize(n, 3);
-  for (vtkIdType i = 0; i < n; ++i)
-  {
-    double p[3];
-    mesh->GetPoint(i, p);
-    V.row(i) << p[0], p[1], p[2];
-  }
-  std::vector<int> tris;
-  vtkCellArray* polys = mesh->GetPolys();
-  vtkNew<vtkIdList> ids;
-  for (polys->InitTraversal(); polys->GetNextCell(ids);)
-  {
-    for (vtkIdType k = 1; k + 1 < ids->GetNumberOfIds(); ++k)
-    {
-      tris.push_back(static_cast<int>(ids->GetId(0)));
-      tris.push_back(static_cast<int>(ids->GetId(k)));
-      tris.push_back(static_cast<int>(ids->GetId(k + 1)));
-    }
-  }
-  F.resize(static_cast<Eigen::Index>(tris.size() / 3), 3);
-  std::copy(tris.begin(), tris.end(), F.data());
+  V = repose_vtk::ToPoints(mesh->GetPoints());
+  F = repose_vtk::ToTriangleFans(mesh);
 }
 
 } // namespace

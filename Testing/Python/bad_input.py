@@ -110,9 +110,19 @@ for i, (what, args, name) in enumerate(cases):
 
 code, _, stderr = run("pose", "--case", f"{work}/case", "--out", f"{work}/x", check=False)
 check(code != 0 and "--pose" in stderr, "missing required option is reported", failures)
+# Every --relax-* word is checked the same way: a usage error (exit 2) naming the option and its words.
+relax_words = [("--relax-model", "fixed-corotated"), ("--relax-volume", "segments"),
+               ("--relax-continuation", "if-inverted"), ("--relax-strained-region", "first")]
+for option, word in relax_words:
+    code, _, stderr = run("pose", "--case", f"{work}/case", "--pose", f"{work}/pose_ok.json", "--relax", option, "bogus",
+                          "--out", f"{work}/relax_words", check=False)
+    lines = stderr.strip().splitlines()
+    check(code == 2 and len(lines) == 1 and option in lines[0] and word in lines[0]
+          and not os.path.exists(f"{work}/relax_words"),
+          f"{option} bogus: exit {code} (a usage error), '{lines[0] if lines else ''}'", failures)
 code, _, stderr = run("frobnicate", check=False)
 check(code != 0 and "frobnicate" in stderr, "unknown command is reported", failures)
 check(digest(inputs) == before, "inputs unchanged", failures)
 check(sorted(os.listdir(f"{work}/case")) == case_files, "case directory unchanged by failed poses", failures)
-print(f"{len(cases) + 4 - len(failures)} passed, {len(failures)} failed")
+print(f"{len(cases) + len(relax_words) + 4 - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)
