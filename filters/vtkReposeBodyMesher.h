@@ -8,11 +8,11 @@
 // point data "FixedBone" (int: joint index of the bone the node lies in, -1 = free) and cell data
 // "Label" (int: label value at the tet's centroid).
 //
-// Pipeline: body mask (labels != 0, united with CT > BodyThreshold, holes filled, largest component)
-// -> optional peel of the outer voxel layer (so skin-to-skin contacts are not welded) -> surface
-// (discrete flying edges, windowed-sinc smoothing; resampled to MeshingSpacing when that is coarser
-// than the image) -> TetGen quality tetrahedralization with seed points in every bone -> node and tet
-// tagging -> only mesh components containing bone nodes are kept.
+// The stages and their heuristics are repose::meshBody (core/body_meshing.h): body mask on a meshing
+// grid chosen for MaxTets -> surface (this module's vtkReposeSurfaceExtractor::ContourMask: discrete
+// flying edges, windowed-sinc smoothing, decimation) -> TetGen with seed points in every bone -> node
+// and tet tagging -> only mesh components containing bone nodes kept. RequestData converts the
+// images, calls it and converts the mesh back.
 
 #include "ReposeFiltersModule.h"
 #include "vtkUnstructuredGridAlgorithm.h"

@@ -1,6 +1,6 @@
 """repose batch on Dask: the tiny phantom (3 poses, one of them again under another name, a pose
-naming an unknown joint, 3 CMU frames) and the TotalSegmentator CT (3 poses, CT posed too) on a
-local cluster of 2 workers, one of them killed mid-run; every posed file equals `repose pose`'s (and
+naming an unknown joint, 3 CMU frames), the small phantom (3 poses) and the TotalSegmentator CT (3
+poses, CT posed too) on a local cluster of 2 workers, one of them killed mid-run; every posed file equals `repose pose`'s (and
 `repose animate`'s for a frame) byte for byte; a rerun skips everything; --retry-failed on an existing
 scheduler runs the failure again."""
 import csv
@@ -23,6 +23,7 @@ shutil.rmtree(work, ignore_errors=True)
 os.makedirs(os.path.join(work, "poses"))
 out = os.path.join(work, "out")
 run("phantom", "--out", os.path.join(work, "tiny"), "--size", "tiny")
+run("phantom", "--out", os.path.join(work, "small"), "--size", "small")
 ts = os.path.join(SHARED, "totalsegmentator")
 ct = os.path.join(ts, "example_ct.nii.gz")
 bvh = os.path.join(SHARED, "mocap", "cmu_short_75frames.bvh")
@@ -43,13 +44,16 @@ bad = pose_file("tail", {"left_tail": ([1, 0, 0], 30)})
 ts_poses = {"hip_flexion": os.path.join(TESTING, "Data", "totalsegmentator_hip_flexion.json"),
             "abduction": pose_file("abduction", {"right_hip": ([0, 1, 0], -15)}),
             "spine": pose_file("spine", {"lumbar_spine": ([1, 0, 0], 10)})}
-TASKS = 2 + len(tiny_poses) + 1 + 3 + len(ts_poses)  # prepares, tiny poses and its failing one, frames, CT poses
+small_poses = {n: tiny_poses[n] for n in ("hip", "arm", "knee")}
+TASKS = 3 + len(tiny_poses) + 1 + 3 + len(small_poses) + len(ts_poses)  # prepares, tiny poses and its failing one, frames, small's and the CT's poses
 manifest = os.path.join(work, "batch.json")
 with open(manifest, "w") as f:
     json.dump({"settings": {"outputs": ["labels", "mesh", "surfaces", "image"]},
                "subjects": [
                    {"name": "tiny", "labels": "tiny/labels.nii.gz", "skeleton": "tiny/skeleton.json",
                     "poses": [*({"name": n, "file": f} for n, f in tiny_poses.items()), bad], "clips": [{"file": bvh, "frames": "0:75:37"}]},
+                   {"name": "small", "labels": "small/labels.nii.gz", "skeleton": "small/skeleton.json",
+                    "poses": [{"name": n, "file": f} for n, f in small_poses.items()]},
                    {"name": "totalseg", "labels": os.path.join(ts, "example_seg_fast_force_split.nii.gz"),
                     "image": ct, "skeleton": os.path.join(TESTING, "Data", "totalsegmentator_skeleton.json"),
                     "prepare": {"mesh_spacing": 6}, "poses": [{"name": n, "file": f} for n, f in ts_poses.items()]}]},
@@ -116,7 +120,7 @@ check(all(0.97 < x < 1.03 for x in ratios) and all(d >= 0.9 for d in dice) and a
 
 # --- every posed file equals the CLI's ---------------------------------------------------------------------
 different = []
-for subject, poses, extra in (("tiny", tiny_poses, []), ("totalseg", ts_poses, ["--image", ct])):
+for subject, poses, extra in (("tiny", tiny_poses, []), ("small", small_poses, []), ("totalseg", ts_poses, ["--image", ct])):
     for name, path in poses.items():
         ref = os.path.join(work, "ref", subject, name)
         run("pose", "--case", os.path.join(out, subject, "case"), "--pose", path, *extra, "--out", ref)
@@ -125,7 +129,7 @@ for subject, poses, extra in (("tiny", tiny_poses, []), ("totalseg", ts_poses, [
             if not filecmp.cmp(os.path.join(ref, f), os.path.join(mine, f), shallow=False):
                 different.append(f"{subject}/{name}/{f}")
 check(not different and os.path.isfile(os.path.join(out, "totalseg", "poses", "spine", "posed_image.nii.gz")),
-      f"{len(tiny_poses) + len(ts_poses)} poses: labels, mesh, surfaces (and CT) equal repose pose's byte for byte "
+      f"{len(tiny_poses) + len(small_poses) + len(ts_poses)} poses: labels, mesh, surfaces (and CT) equal repose pose's byte for byte "
       f"{different}", failures)
 ref = os.path.join(work, "ref", "animate")
 run("animate", "--case", os.path.join(out, "tiny", "case"), "--bvh", bvh, "--frames", "37:38", "--volumes", "--out", ref)
@@ -141,7 +145,7 @@ with open(os.path.join(out, "batch.json")) as f:
 with open(ct, "rb") as f:
     ct_hash = hashlib.sha256(f.read()).hexdigest()
 version = run("--version")[1].split()[1]
-check(record["versions"]["repose"] == version and record["subjects"][1]["inputs"]["image"]["sha256"] == ct_hash
+check(record["versions"]["repose"] == version and record["subjects"][2]["inputs"]["image"]["sha256"] == ct_hash
       and record["settings"]["workers"] == 2,
       f"batch.json: repose {record['versions']['repose']}, the CT's sha256, 2 workers", failures)
 
