@@ -18,6 +18,7 @@
 #include "itkNiftiImageIOFactory.h"
 #include "itkNrrdImageIOFactory.h"
 
+#include "image_file_integrity.h"
 #include "temporary_lock.h"
 #include "written_file.h"
 
@@ -73,6 +74,19 @@ std::uintmax_t DataBytes(const fs::path& path)
     total += DataBytes(entry.path());
   }
   return total;
+}
+
+// A compressed NRRD or MetaImage read back: every stream inflates whole, to all the voxels.
+void RequireCompleteData(const std::string& target, const std::string& written, std::uintmax_t voxelBytes)
+{
+  try
+  {
+    repose::checkImageFileIntegrity(written, voxelBytes);
+  }
+  catch (const std::runtime_error&)
+  {
+    repose::throwWriteFailure(target, written);
+  }
 }
 
 template <class T>
@@ -252,10 +266,14 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
   {
     return fail("input scalars must have one component (or three floats: a vector field)");
   }
-  const bool compress = EndsWith(target, ".nii.gz");
+  const bool gzipNifti = EndsWith(target, ".nii.gz");
+  // NRRD (gzip encoding) and MetaImage (zlib) compressed as .nii.gz is: a label volume shrinks
+  // tens of times. A detached .nhdr keeps raw data, which is why one asks for a detached header.
+  const bool compress =
+    gzipNifti || EndsWith(target, ".nrrd") || EndsWith(target, ".mha") || EndsWith(target, ".mhd");
   const bool pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
   const bool vti = EndsWith(target, ".vti");
-  if (!(compress || pair || vti || EndsWith(target, ".nii") || EndsWith(target, ".nrrd") || EndsWith(target, ".mha")))
+  if (!(compress || pair || vti || EndsWith(target, ".nii")))
   {
     return fail("unknown extension; use .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd or .vti");
   }
@@ -305,9 +323,13 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
     {
       repose::throwWriteFailure(target, tmpFile.string(), errno);
     }
-    if (compress)
+    if (gzipNifti)
     {
       repose::requireCompleteGzip(target, tmpFile.string(), voxelBytes);
+    }
+    else if (compress)
+    {
+      RequireCompleteData(target, tmpFile.string(), voxelBytes);
     }
     repose::requireWritten(target, pair ? tmpDir.string() : tmpFile.string(), 1);
     if (vti)

@@ -2,7 +2,7 @@
 #define vtkReposeImageWriter_h
 // Writes 3-D scalar vtkImageData (int, short, unsigned short, unsigned char, float, double; or 3 floats, a vector
 // field) through ITK with its origin, spacing and direction matrix. Format by extension: .nii,
-// .nii.gz (compressed), .nrrd, .mha, .nhdr, .mhd, or .vti (VTK's XML image data, with
+// .nii.gz, .nrrd (gzip-encoded), .mha and .mhd (zlib), .nhdr (raw), or .vti (VTK's XML image data, with
 // its direction, for ParaView; written by VTK). Output is written under a temporary name in the target directory and renamed
 // into place, so a failed or interrupted write never leaves a partial file under the final name.
 
