@@ -29,6 +29,12 @@ public:
   vtkGetMacro(SmallestIntegerType, bool);
   vtkBooleanMacro(SmallestIntegerType, bool);
 
+  /// What the file holds, after "Repose VERSION " in a NIfTI's descrip field ("posed labels"). Unset:
+  /// "labels" with SmallestIntegerType, "displacement field" for 3 components, else "image". NRRD,
+  /// MetaImage and .vti files carry the version as a field of their own (vtkReposeVersion).
+  vtkSetStringMacro(Description);
+  vtkGetStringMacro(Description);
+
 protected:
   vtkReposeImageWriter();
   ~vtkReposeImageWriter() override;
@@ -37,6 +43,7 @@ protected:
   int WriteImage(vtkImageData* image);
 
   bool SmallestIntegerType = false;
+  char* Description = nullptr;
 
 private:
   vtkReposeImageWriter(const vtkReposeImageWriter&) = delete;
