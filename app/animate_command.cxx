@@ -68,7 +68,8 @@ const char* kAnimateUsage =
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
     "  --format EXT      the format of the frames' volumes (.nii.gz, .nii, .nrrd, .mha, .mhd, .vti); with .vti the\n"
-    "                    label volume and CT of each frame are parts of animation.pvd too (ParaView)\n"
+    "                    label volume and CT of each frame are parts of animation.pvd too (ParaView); seg.nrrd\n"
+    "                    writes each frame's labels as a 3D Slicer segmentation (its CT as .nrrd)\n"
     "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*); a\n"
     "                    folder is read as a DICOM CT series (--series-uid UID when it holds several) and each\n"
     "                    frame's CT written as one (DIR/frames/image_NNNNN/)\n"
@@ -197,8 +198,8 @@ int runAnimateCommand(int argc, char** argv, int first) {
   }
   if (o.has("format") && !o.has("volumes") && !o.has("image"))
     throw UsageError("--format sets the format of the frames' volumes: it needs --volumes or --image");
-  const std::string volumeExt = o.has("format") ? normalizedFormat(o.get("format")) : ".nii.gz";
-  if (o.has("format")) imageExt = volumeExt;
+  const std::string volumeExt = o.has("format") ? normalizedLabelFormat(o.get("format")) : ".nii.gz";
+  if (o.has("format")) imageExt = imageFormatBeside(volumeExt);
   const bool volumesInPvd = volumeExt == ".vti";
 
   std::unique_ptr<MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
@@ -268,7 +269,7 @@ int runAnimateCommand(int argc, char** argv, int first) {
     csv << f << "," << time << "," << pipeline.posedMeshVolume() / restVolume << "," << posing * 1e3;
     if (labels) {
       std::snprintf(name, sizeof(name), "frames/labels_%05d", f);
-      writeLabelImage(labels, out.stage(name + volumeExt));
+      writeLabelVolume(pipeline, labels, out.stage(name + volumeExt));
       if (volumesInPvd) entries.push_back({time, volumePart, name + volumeExt});
       const auto counts = labelCounts(labels);
       for (const auto& [label, count] : restCounts) {

@@ -92,11 +92,15 @@ void RequireCompleteData(const std::string& target, const std::string& written, 
   }
 }
 
-// The version as NRRD and MetaImage write it: a key/value field from the image's dictionary.
-itk::MetaDataDictionary VersionNotes()
+// The version and `fields` as NRRD and MetaImage write them: key/value fields from the image's dictionary.
+itk::MetaDataDictionary HeaderNotes(const std::vector<std::pair<std::string, std::string>>& fields)
 {
   itk::MetaDataDictionary notes;
   itk::EncapsulateMetaData<std::string>(notes, vtkReposeVersion::GetKey(), vtkReposeVersion::GetVersion());
+  for (const auto& [key, value] : fields)
+  {
+    itk::EncapsulateMetaData<std::string>(notes, key, value);
+  }
   return notes;
 }
 
@@ -260,6 +264,11 @@ vtkReposeImageWriter::~vtkReposeImageWriter()
   this->SetDescription(nullptr);
 }
 
+std::vector<std::pair<std::string, std::string>> vtkReposeImageWriter::HeaderFields(vtkImageData*)
+{
+  return {};
+}
+
 int vtkReposeImageWriter::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
 {
@@ -340,7 +349,7 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
     {
       // NIfTI's note is set after ITK writes it uncompressed (ITK 5.2 leaves descrip empty).
       const fs::path itkFile = gzipNifti ? tmpDir / base.substr(0, base.size() - 3) : tmpFile;
-      WriteByType(input, itkFile.string(), compress && !gzipNifti, VersionNotes());
+      WriteByType(input, itkFile.string(), compress && !gzipNifti, HeaderNotes(this->HeaderFields(input)));
       if (nifti)
       {
         if (DataBytes(itkFile) < voxelBytes + 352)

@@ -10,6 +10,8 @@
 #include "vtkReposeWriterBase.h"
 
 #include <string>
+#include <utility>
+#include <vector>
 
 class vtkImageData;
 
@@ -41,6 +43,9 @@ protected:
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int WriteImage(vtkImageData* image);
+  /// Key/value fields a subclass adds to a NRRD or MetaImage header (after ReposeVersion), given
+  /// the image as it is written. None here. May throw std::exception (its what() the reason).
+  virtual std::vector<std::pair<std::string, std::string>> HeaderFields(vtkImageData* written);
 
   bool SmallestIntegerType = false;
   char* Description = nullptr;
