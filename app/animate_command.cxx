@@ -68,7 +68,8 @@ const char* kAnimateUsage =
     "  --frames A:B:S    frames A (inclusive) to B (exclusive) every S (default: all)\n"
     "  --volumes         also write a posed label volume per frame (DIR/frames/labels_NNNNN.nii.gz)\n"
     "  --format EXT      the format of the frames' volumes (.nii.gz, .nii, .nrrd, .mha, .mhd, .vti); with .vti the\n"
-    "                    label volume and CT of each frame are parts of animation.pvd too (ParaView)\n"
+    "                    label volume and CT of each frame are parts of animation.pvd too (ParaView); seg.nrrd\n"
+    "                    writes each frame's labels as a 3D Slicer segmentation (its CT as .nrrd)\n"
     "  --image FILE      also pose this CT/MRI (on the case's label grid) per frame (DIR/frames/image_NNNNN.*); a\n"
     "                    folder is read as a DICOM CT series (--series-uid UID when it holds several) and each\n"
     "                    frame's CT written as one (DIR/frames/image_NNNNN/)\n"
@@ -198,8 +199,9 @@ class FramesTable {
 /// when they are .vti (ParaView reads no other volume format from a .pvd).
 class FrameFiles {
  public:
-  FrameFiles(AtomicOutputs& out, const MeshPoser* meshes, std::string volumeExt, std::string imageExt)
-      : out_(out), meshes_(meshes), volumeExt_(std::move(volumeExt)), imageExt_(std::move(imageExt)),
+  FrameFiles(Pipeline& pipeline, AtomicOutputs& out, const MeshPoser* meshes, std::string volumeExt,
+             std::string imageExt)
+      : pipeline_(pipeline), out_(out), meshes_(meshes), volumeExt_(std::move(volumeExt)), imageExt_(std::move(imageExt)),
         volumePart_(2 + int(meshes ? meshes->meshes().size() : 0)) {}
 
   void write(int f, double time, vtkUnstructuredGrid* mesh, vtkPolyData* surfaces, vtkImageData* labels,
@@ -215,7 +217,7 @@ class FrameFiles {
     const bool inPvd = volumeExt_ == ".vti";
     if (labels)
       add(time, inPvd ? volumePart_ : -1, numbered("frames/labels_", f, volumeExt_),
-          [&](const std::string& path) { writeLabelImage(labels, path); });
+          [&](const std::string& path) { writeLabelVolume(pipeline_, labels, path); });
     if (image)
       add(time, inPvd ? volumePart_ + 1 : -1, numbered("frames/image_", f, imageExt_),
           [&](const std::string& path) { writeImage(image, path); });
@@ -236,6 +238,7 @@ class FrameFiles {
     if (part >= 0) entries_.push_back({time, part, name});
   }
 
+  Pipeline& pipeline_;  // the case's label table, for label formats that carry it
   AtomicOutputs& out_;
   const MeshPoser* meshes_;
   std::string volumeExt_, imageExt_;
@@ -341,8 +344,8 @@ int runAnimateCommand(int argc, char** argv, int first) {
   }
   if (o.has("format") && !o.has("volumes") && !o.has("image"))
     throw UsageError("--format sets the format of the frames' volumes: it needs --volumes or --image");
-  const std::string volumeExt = o.has("format") ? normalizedFormat(o.get("format")) : ".nii.gz";
-  if (o.has("format")) imageExt = volumeExt;
+  const std::string volumeExt = o.has("format") ? normalizedLabelFormat(o.get("format")) : ".nii.gz";
+  if (o.has("format")) imageExt = imageFormatBeside(volumeExt);
 
   std::unique_ptr<MeshPoser> meshes = bindMeshes(pipeline, o, caseDir);
   AtomicOutputs out(outDir);
@@ -350,7 +353,7 @@ int runAnimateCommand(int argc, char** argv, int first) {
   if (volumes) writeLabelTables(pipeline, out, "frames/labels");
   const double restVolume = pipeline.restMeshVolume();
   FramesTable table(volumes ? labelCounts(pipeline.restLabels()) : std::map<int, long>(), o.has("relax"), volumes);
-  FrameFiles files(out, meshes.get(), volumeExt, imageExt);
+  FrameFiles files(pipeline, out, meshes.get(), volumeExt, imageExt);
   AnimationSummary summary;
   for (int f = range.start; f < range.stop; f += range.step) {
     pipeline.setPose(retargeter->pose(f));

@@ -6,6 +6,10 @@
 #include <string>
 #include <type_traits>
 
+#include <vtkSmartPointer.h>
+
+#include "vtkReposeVersion.h"
+
 namespace repose {
 
 /// The last bytes of a VTK XML file and of a PNG picture (its IEND chunk).
@@ -27,6 +31,16 @@ public:
 private:
   int saved_ = -1;
 };
+
+/// A shallow copy of `data` whose field data carries ReposeVersion (vtkReposeVersion), for the VTK
+/// XML writers: the file says which Repose wrote it, the pipeline's output is left as it is.
+template <class Data>
+vtkSmartPointer<Data> withVersion(Data* data) {
+  auto copy = vtkSmartPointer<Data>::New();
+  copy->ShallowCopy(data);
+  vtkReposeVersion::Stamp(copy);
+  return copy;
+}
 
 /// Runs `writer->Write()` (a VTK writer whose file name is set) and checks it as above.
 template <class Writer>

@@ -147,7 +147,7 @@ void writeSurfaceMesh(vtkPolyData* mesh, const std::string& path) {
   } else if (ext == ".vtp") {
     auto w = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
     w->SetFileName(path.c_str());
-    w->SetInputData(mesh);
+    w->SetInputData(withVersion(mesh));
     w->SetDataModeToAppended();
     w->EncodeAppendedDataOff();
     writeChecked(w.Get(), path, kVtkXmlTail);

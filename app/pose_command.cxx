@@ -43,6 +43,8 @@ const char* kPoseUsage =
     "  DIR/posed_image<ext of the image>. --format (.nii.gz, .nii, .nrrd, .mha, .mhd) sets the label\n"
     "  volume's format; default: the format of the case's labels. --format vti writes both volumes as VTK XML\n"
     "  image data with their direction matrix: ParaView opens them lined up with posed_mesh.vtu\n"
+    "  --format seg.nrrd       DIR/posed_labels.seg.nrrd, a 3D Slicer segmentation: a segment per label, named and\n"
+    "                          coloured from the case's label table (the posed image keeps its own format)\n"
     "  --image FILE            a CT/MRI on the case's label grid; a folder is read as a DICOM CT series\n"
     "                          (--series-uid UID when it holds several) and the posed CT written as one\n"
     "                          (DIR/posed_image/: a new series in the same study, image type DERIVED)\n"
@@ -135,7 +137,7 @@ void writePosedVdb(Pipeline& pipeline, AtomicOutputs& out, double imageBackgroun
 /// Every file `pose` may write (each format's posed volumes), so that none can replace an input.
 std::vector<std::string> poseOutputNames(const std::vector<std::string>& meshes) {
   std::vector<std::string> names = {"posed_mesh.vtu", "posed_surfaces.vtp", "fidelity.csv", "fidelity.png"};
-  for (const char* ext : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".raw.gz", ".mha", ".mhd", ".raw", ".zraw", ".vdb", ".dcm", ""})
+  for (const char* ext : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".raw.gz", ".mha", ".mhd", ".raw", ".zraw", ".vdb", ".dcm", ".seg.nrrd", ""})
     for (const char* stem : {"posed_labels", "posed_image"}) names.push_back(stem + std::string(ext));
   for (const std::string& mesh : meshes) names.push_back(posedMeshName(mesh));
   return names;
@@ -176,7 +178,7 @@ int runPoseCommand(int argc, char** argv, int first) {
   const bool dicom = o.get("format") == "dicom";
   const std::string labelsExt = vdb ? ".vdb"
                                 : dicom ? ".dcm"
-                                : o.has("format") ? normalizedFormat(o.get("format"))
+                                : o.has("format") ? normalizedLabelFormat(o.get("format"))
                                                   : pipeline.labelsExtension();
   if (dicom) imageExt = "/";  // the posed CT as a DICOM series
   if (labelsExt == ".vti") imageExt = ".vti";  // for ParaView, the CT too

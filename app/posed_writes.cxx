@@ -8,11 +8,14 @@
 
 #include <set>
 #include <stdexcept>
+#include <vector>
 
 #include "vtkReposeDicomSegWriter.h"
 #include "vtkReposeDicomSeriesWriter.h"
+#include "vtkReposeSlicerSegmentationWriter.h"
 
 #include "atomic_outputs.h"
+#include "checked_write.h"
 #include "label_table.h"
 #include "repose_pipeline.h"
 
@@ -25,10 +28,59 @@ void writeLabelTables(Pipeline& pipeline, AtomicOutputs& out, const std::string&
   writeTextFile(out.stage(base + ".ctbl"), labelTableToSlicerColorTable(table));
 }
 
+namespace {
+
+struct Segment {
+  int value;
+  std::string name;
+  double rgb[3];
+  bool bone;
+};
+
+/// A segment per label: each label the case's table names (not the background), then each value of
+/// `labels` it does not name, as "label_<value>" in grey.
+std::vector<Segment> labelSegments(Pipeline& pipeline, vtkImageData* labels) {
+  const LabelTable table = pipeline.labelTableTsv().empty()
+                               ? LabelTable{}
+                               : parseLabelTable(pipeline.labelTableTsv(), "the case's label table");
+  std::vector<Segment> segments;
+  std::set<int> named;
+  for (const LabelInfo& l : table.labels) {
+    if (l.value == 0 || l.kind == LabelKind::Background) continue;
+    const auto rgba = displayColour(l);
+    segments.push_back({l.value, l.name, {rgba[0] / 255.0, rgba[1] / 255.0, rgba[2] / 255.0}, l.kind == LabelKind::Bone});
+    named.insert(l.value);
+  }
+  vtkDataArray* values = labels->GetPointData()->GetScalars();
+  std::set<int> present;
+  for (vtkIdType i = 0; i < values->GetNumberOfTuples(); ++i) present.insert(int(values->GetTuple1(i)));
+  for (int v : present)
+    if (v != 0 && !named.count(v)) segments.push_back({v, "label_" + std::to_string(v), {0.8, 0.8, 0.8}, false});
+  return segments;
+}
+
+bool endsWith(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+}  // namespace
+
+void writeLabelVolume(Pipeline& pipeline, vtkImageData* labels, const std::string& path) {
+  if (!endsWith(path, ".seg.nrrd")) return writeLabelImage(labels, path);
+  const QuietStderr quiet;
+  vtkNew<vtkReposeSlicerSegmentationWriter> writer;
+  for (const Segment& s : labelSegments(pipeline, labels))
+    writer->AddSegment(s.value, s.name.c_str(), s.rgb[0], s.rgb[1], s.rgb[2]);
+  writer->SetFileName(path.c_str());
+  writer->SetDescription("labels");
+  writer->SetInputData(labels);
+  if (!writer->Write()) throw std::runtime_error(writer->GetLastError());
+}
+
 void writePosed(Pipeline& pipeline, AtomicOutputs& out, const std::string& labelsExt, const std::string& imageExt) {
   writeMesh(pipeline.posedMesh(), out.stage("posed_mesh.vtu"));
   writeSurfaces(pipeline.posedSurfaces(), out.stage("posed_surfaces.vtp"));
-  writeLabelImage(pipeline.posedLabels(), out.stage("posed_labels" + labelsExt));
+  writeLabelVolume(pipeline, pipeline.posedLabels(), out.stage("posed_labels" + labelsExt));
   writeLabelTables(pipeline, out, "posed_labels");
   if (vtkImageData* image = pipeline.posedImage()) writeImage(image, out.stage("posed_image" + imageExt));
 }
@@ -49,25 +101,12 @@ void writePosedDicom(Pipeline& pipeline, AtomicOutputs& out) {
   vtkNew<vtkImageData> labels;
   labels->ShallowCopy(pipeline.posedLabels());
   labels->GetFieldData()->ShallowCopy(reference->GetFieldData());
-  const LabelTable table = pipeline.labelTableTsv().empty()
-                               ? LabelTable{}
-                               : parseLabelTable(pipeline.labelTableTsv(), "the case's label table");
   vtkNew<vtkReposeDicomSegWriter> seg;
   seg->SetInputData(labels);
   seg->SetFileName(out.stage("posed_labels.dcm").c_str());
   seg->SetSeriesDescription("Reposed labels (Repose)");
-  std::set<int> named;
-  for (const LabelInfo& l : table.labels) {
-    if (l.value == 0 || l.kind == LabelKind::Background) continue;
-    const auto rgba = displayColour(l);
-    seg->AddSegment(l.value, l.name.c_str(), rgba[0] / 255.0, rgba[1] / 255.0, rgba[2] / 255.0, l.kind == LabelKind::Bone);
-    named.insert(l.value);
-  }
-  vtkDataArray* values = labels->GetPointData()->GetScalars();
-  std::set<int> present;
-  for (vtkIdType i = 0; i < values->GetNumberOfTuples(); ++i) present.insert(int(values->GetTuple1(i)));
-  for (int v : present)  // labels the table does not name still get a segment
-    if (v != 0 && !named.count(v)) seg->AddSegment(v, ("label_" + std::to_string(v)).c_str(), 0.8, 0.8, 0.8, false);
+  for (const Segment& s : labelSegments(pipeline, labels))
+    seg->AddSegment(s.value, s.name.c_str(), s.rgb[0], s.rgb[1], s.rgb[2], s.bone);
   if (!seg->Write()) throw std::runtime_error(seg->GetLastError());
   writeLabelTables(pipeline, out, "posed_labels");
   if (image) writeImage(image, out.stage("posed_image/"));

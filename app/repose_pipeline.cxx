@@ -347,7 +347,7 @@ void writeLabelImage(vtkImageData* labels, const std::string& path) { writeImage
 void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path) {
   auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
   writer->SetFileName(path.c_str());
-  writer->SetInputData(mesh);
+  writer->SetInputData(withVersion(mesh));
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
   writeChecked(writer.Get(), path, kVtkXmlTail);
@@ -356,7 +356,7 @@ void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path) {
 void writeSurfaces(vtkPolyData* surfaces, const std::string& path) {
   auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
   writer->SetFileName(path.c_str());
-  writer->SetInputData(surfaces);
+  writer->SetInputData(withVersion(surfaces));
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
   writeChecked(writer.Get(), path, kVtkXmlTail);

@@ -13,12 +13,16 @@
 
 #include "itkImage.h"
 #include "itkImageFileWriter.h"
+#include "itkMetaDataObject.h"
 #include "itkVector.h"
 #include "itkMetaImageIOFactory.h"
 #include "itkNiftiImageIOFactory.h"
 #include "itkNrrdImageIOFactory.h"
 
+#include "image_file_integrity.h"
+#include "nifti_description.h"
 #include "temporary_lock.h"
+#include "vtkReposeVersion.h"
 #include "written_file.h"
 
 #include <algorithm>
@@ -75,8 +79,34 @@ std::uintmax_t DataBytes(const fs::path& path)
   return total;
 }
 
+// A compressed NRRD or MetaImage read back: every stream inflates whole, to all the voxels.
+void RequireCompleteData(const std::string& target, const std::string& written, std::uintmax_t voxelBytes)
+{
+  try
+  {
+    repose::checkImageFileIntegrity(written, voxelBytes);
+  }
+  catch (const std::runtime_error&)
+  {
+    repose::throwWriteFailure(target, written);
+  }
+}
+
+// The version and `fields` as NRRD and MetaImage write them: key/value fields from the image's dictionary.
+itk::MetaDataDictionary HeaderNotes(const std::vector<std::pair<std::string, std::string>>& fields)
+{
+  itk::MetaDataDictionary notes;
+  itk::EncapsulateMetaData<std::string>(notes, vtkReposeVersion::GetKey(), vtkReposeVersion::GetVersion());
+  for (const auto& [key, value] : fields)
+  {
+    itk::EncapsulateMetaData<std::string>(notes, key, value);
+  }
+  return notes;
+}
+
 template <class T>
-void WriteWithItk(vtkImageData* input, const std::string& fileName, bool compress)
+void WriteWithItk(
+  vtkImageData* input, const std::string& fileName, bool compress, const itk::MetaDataDictionary& notes)
 {
   using ImageType = itk::Image<T, 3>;
   typename ImageType::Pointer image = ImageType::New();
@@ -115,6 +145,7 @@ void WriteWithItk(vtkImageData* input, const std::string& fileName, bool compres
   image->SetSpacing(spacing);
   image->SetOrigin(origin);
   image->SetDirection(direction);
+  image->SetMetaDataDictionary(notes);
   image->Allocate();
   const T* src = static_cast<const T*>(input->GetPointData()->GetScalars()->GetVoidPointer(0));
   std::copy(src, src + region.GetNumberOfPixels(), image->GetBufferPointer());
@@ -130,9 +161,12 @@ void WriteWithItk(vtkImageData* input, const std::string& fileName, bool compres
 // VTK's XML image data (ParaView's .vti): origin, spacing and the direction matrix, zlib-compressed.
 void WriteVti(vtkImageData* input, const std::string& fileName)
 {
+  vtkNew<vtkImageData> stamped;
+  stamped->ShallowCopy(input);
+  vtkReposeVersion::Stamp(stamped);
   vtkNew<vtkXMLImageDataWriter> writer;
   writer->SetFileName(fileName.c_str());
-  writer->SetInputData(input);
+  writer->SetInputData(stamped);
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();
   writer->SetCompressorTypeToZLib();
@@ -187,33 +221,34 @@ vtkSmartPointer<vtkImageData> WithSmallestIntegerType(vtkImageData* input)
   return narrowed;
 }
 
-void WriteByType(vtkImageData* input, const std::string& fileName, bool compress)
+void WriteByType(
+  vtkImageData* input, const std::string& fileName, bool compress, const itk::MetaDataDictionary& notes)
 {
   if (input->GetPointData()->GetScalars()->GetNumberOfComponents() == 3)
   {
     // A displacement field: ITK's vector image (NIfTI intent "vector", MetaImage 3 channels).
-    WriteWithItk<itk::Vector<float, 3>>(input, fileName, compress);
+    WriteWithItk<itk::Vector<float, 3>>(input, fileName, compress, notes);
     return;
   }
   switch (input->GetScalarType())
   {
     case VTK_INT:
-      WriteWithItk<int>(input, fileName, compress);
+      WriteWithItk<int>(input, fileName, compress, notes);
       break;
     case VTK_SHORT:
-      WriteWithItk<short>(input, fileName, compress);
+      WriteWithItk<short>(input, fileName, compress, notes);
       break;
     case VTK_UNSIGNED_CHAR:
-      WriteWithItk<unsigned char>(input, fileName, compress);
+      WriteWithItk<unsigned char>(input, fileName, compress, notes);
       break;
     case VTK_UNSIGNED_SHORT:
-      WriteWithItk<unsigned short>(input, fileName, compress);
+      WriteWithItk<unsigned short>(input, fileName, compress, notes);
       break;
     case VTK_FLOAT:
-      WriteWithItk<float>(input, fileName, compress);
+      WriteWithItk<float>(input, fileName, compress, notes);
       break;
     case VTK_DOUBLE:
-      WriteWithItk<double>(input, fileName, compress);
+      WriteWithItk<double>(input, fileName, compress, notes);
       break;
     default:
       throw std::runtime_error(std::string("unsupported scalar type ") + input->GetScalarTypeAsString() +
@@ -224,7 +259,15 @@ void WriteByType(vtkImageData* input, const std::string& fileName, bool compress
 
 vtkReposeImageWriter::vtkReposeImageWriter() = default;
 
-vtkReposeImageWriter::~vtkReposeImageWriter() = default;
+vtkReposeImageWriter::~vtkReposeImageWriter()
+{
+  this->SetDescription(nullptr);
+}
+
+std::vector<std::pair<std::string, std::string>> vtkReposeImageWriter::HeaderFields(vtkImageData*)
+{
+  return {};
+}
 
 int vtkReposeImageWriter::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector*)
@@ -252,10 +295,15 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
   {
     return fail("input scalars must have one component (or three floats: a vector field)");
   }
-  const bool compress = EndsWith(target, ".nii.gz");
+  const bool gzipNifti = EndsWith(target, ".nii.gz");
+  // NRRD (gzip encoding) and MetaImage (zlib) compressed as .nii.gz is: a label volume shrinks
+  // tens of times. A detached .nhdr keeps raw data, which is why one asks for a detached header.
+  const bool compress =
+    gzipNifti || EndsWith(target, ".nrrd") || EndsWith(target, ".mha") || EndsWith(target, ".mhd");
   const bool pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
   const bool vti = EndsWith(target, ".vti");
-  if (!(compress || pair || vti || EndsWith(target, ".nii") || EndsWith(target, ".nrrd") || EndsWith(target, ".mha")))
+  const bool nifti = gzipNifti || EndsWith(target, ".nii");
+  if (!(compress || pair || vti || EndsWith(target, ".nii")))
   {
     return fail("unknown extension; use .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd or .vti");
   }
@@ -287,6 +335,9 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
   {
     return fail(e.what());  // not ours to remove: another process writes it
   }
+  // ITK's NIfTI writer reports short writes on stderr only: the file is read back to its last byte.
+  const std::uintmax_t voxelBytes = std::uintmax_t(input->GetNumberOfPoints()) *
+    std::uintmax_t(input->GetScalarSize()) * std::uintmax_t(components);
   try
   {
     errno = 0;
@@ -296,18 +347,34 @@ int vtkReposeImageWriter::WriteImage(vtkImageData* given)
     }
     else
     {
-      WriteByType(input, tmpFile.string(), compress);
+      // NIfTI's note is set after ITK writes it uncompressed (ITK 5.2 leaves descrip empty).
+      const fs::path itkFile = gzipNifti ? tmpDir / base.substr(0, base.size() - 3) : tmpFile;
+      WriteByType(input, itkFile.string(), compress && !gzipNifti, HeaderNotes(this->HeaderFields(input)));
+      if (nifti)
+      {
+        if (DataBytes(itkFile) < voxelBytes + 352)
+        {
+          repose::throwWriteFailure(target, itkFile.string(), errno);
+        }
+        const std::string what = this->Description ? this->Description
+          : components == 3                        ? "displacement field"
+          : this->SmallestIntegerType              ? "labels"
+                                                   : "image";
+        repose::describeNifti(target, itkFile.string(), std::string("Repose ") + vtkReposeVersion::GetVersion() +
+            " " + what, gzipNifti ? tmpFile.string() : "");
+      }
     }
-    // ITK's NIfTI writer reports short writes on stderr only: the file is read back to its last byte.
-    const std::uintmax_t voxelBytes = std::uintmax_t(input->GetNumberOfPoints()) *
-      std::uintmax_t(input->GetScalarSize()) * std::uintmax_t(components);
     if (!fs::exists(tmpFile))
     {
       repose::throwWriteFailure(target, tmpFile.string(), errno);
     }
-    if (compress)
+    if (gzipNifti)
     {
       repose::requireCompleteGzip(target, tmpFile.string(), voxelBytes);
+    }
+    else if (compress)
+    {
+      RequireCompleteData(target, tmpFile.string(), voxelBytes);
     }
     repose::requireWritten(target, pair ? tmpDir.string() : tmpFile.string(), 1);
     if (vti)
@@ -349,4 +416,5 @@ void vtkReposeImageWriter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "SmallestIntegerType: " << this->SmallestIntegerType << "\n";
+  os << indent << "Description: " << (this->Description ? this->Description : "(from the content)") << "\n";
 }

@@ -2,7 +2,7 @@
 #define vtkReposeImageWriter_h
 // Writes 3-D scalar vtkImageData (int, short, unsigned short, unsigned char, float, double; or 3 floats, a vector
 // field) through ITK with its origin, spacing and direction matrix. Format by extension: .nii,
-// .nii.gz (compressed), .nrrd, .mha, .nhdr, .mhd, or .vti (VTK's XML image data, with
+// .nii.gz, .nrrd (gzip-encoded), .mha and .mhd (zlib), .nhdr (raw), or .vti (VTK's XML image data, with
 // its direction, for ParaView; written by VTK). Output is written under a temporary name in the target directory and renamed
 // into place, so a failed or interrupted write never leaves a partial file under the final name.
 
@@ -10,6 +10,8 @@
 #include "vtkReposeWriterBase.h"
 
 #include <string>
+#include <utility>
+#include <vector>
 
 class vtkImageData;
 
@@ -29,14 +31,24 @@ public:
   vtkGetMacro(SmallestIntegerType, bool);
   vtkBooleanMacro(SmallestIntegerType, bool);
 
+  /// What the file holds, after "Repose VERSION " in a NIfTI's descrip field ("posed labels"). Unset:
+  /// "labels" with SmallestIntegerType, "displacement field" for 3 components, else "image". NRRD,
+  /// MetaImage and .vti files carry the version as a field of their own (vtkReposeVersion).
+  vtkSetStringMacro(Description);
+  vtkGetStringMacro(Description);
+
 protected:
   vtkReposeImageWriter();
   ~vtkReposeImageWriter() override;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int WriteImage(vtkImageData* image);
+  /// Key/value fields a subclass adds to a NRRD or MetaImage header (after ReposeVersion), given
+  /// the image as it is written. None here. May throw std::exception (its what() the reason).
+  virtual std::vector<std::pair<std::string, std::string>> HeaderFields(vtkImageData* written);
 
   bool SmallestIntegerType = false;
+  char* Description = nullptr;
 
 private:
   vtkReposeImageWriter(const vtkReposeImageWriter&) = delete;

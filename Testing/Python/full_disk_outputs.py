@@ -46,9 +46,9 @@ runs += [(["rig", "--labels", f"{phantom}/labels.nii.gz", "--out", f"{out}/skele
           f"{out}/skeleton.json")]
 runs += [(["voxelize", "--skin", f"{work}/skin.stl", "--bone", f"femur_left={work}/bone.stl", "--voxel", "2",
            "--out", f"{out}/labels.nii.gz"], out, limit, f"{out}/labels.nii.gz") for limit in (0, 100)]
-# A raw volume's short write (NRRD, no compression): the header fits, the voxels do not.
+# A raw volume's short write (a detached NRRD, not compressed): the header fits, the voxels do not.
 runs += [(["voxelize", "--skin", f"{work}/skin.stl", "--bone", f"femur_left={work}/bone.stl", "--voxel", "2",
-           "--out", f"{out}/labels.nrrd"], out, 4 * KB, f"{out}/labels.nrrd")]
+           "--out", f"{out}/labels.nhdr"], out, 4 * KB, f"{out}/labels.nhdr")]
 runs += [(["prepare", "--labels", f"{phantom}/labels.nii.gz", "--skeleton", f"{phantom}/skeleton.json",
            "--out", out], out, 64 * KB, f"{out}/mesh.vtu")]
 runs += [(["pose", "--case", case, "--pose", pose, "--out", out], out, limit, f"{out}/posed_mesh.vtu")

@@ -11,7 +11,7 @@ from vtkmodules.vtkIOXML import (vtkXMLPolyDataReader, vtkXMLPolyDataWriter, vtk
                                  vtkXMLUnstructuredGridWriter)
 
 from repose import (vtkReposeCorotationalRelax, vtkReposeDicomSeriesWriter, vtkReposeImageReader, vtkReposeImageWriter, vtkReposeLabelTable,
-                    vtkReposePosedVolume, vtkReposeSkeletonPoses, vtkReposeSkinning, vtkReposeSurfaceDeformer)
+                    vtkReposePosedVolume, vtkReposeSkeletonPoses, vtkReposeSkinning, vtkReposeSurfaceDeformer, vtkReposeVersion)
 
 from .checked_files import WriteFailure, check_written, failure_reason, write_text
 
@@ -70,7 +70,7 @@ def write_dicom_series(image, folder):
     """The posed CT of a DICOM input as a DICOM series (the input's patient and study, a new series)."""
     writer = vtkReposeDicomSeriesWriter()
     writer.SetFileName(folder)
-    writer.SetSeriesDescription(f"Reposed (Repose {os.environ.get('REPOSE_VERSION', '')})".replace(" )", ")"))
+    writer.SetSeriesDescription(f"Reposed (Repose {vtkReposeVersion.GetVersion()})")
     writer.SetInputData(image)
     if not writer.Write():
         raise RuntimeError(writer.GetLastError() or f"{folder}: cannot write the DICOM series")
@@ -103,9 +103,12 @@ def forget_cached_ranges(data):
 
 def write_xml(writer_type, data, path):
     forget_cached_ranges(data)
+    stamped = type(data)()  # a shallow copy carrying the version, as `repose pose` writes it
+    stamped.ShallowCopy(data)
+    vtkReposeVersion.Stamp(stamped)
     writer = writer_type()
     writer.SetFileName(path)
-    writer.SetInputData(data)
+    writer.SetInputData(stamped)
     writer.SetDataModeToAppended()
     writer.EncodeAppendedDataOff()
     for source in (writer, writer.GetExecutive()):  # their multi-line texts: the failure is reported below
