@@ -24,7 +24,13 @@ std::unique_ptr<MeshPoser> bindMeshes(Pipeline& pipeline, const Options& o, cons
     if (!isSurfaceMeshPath(path))
       throw std::runtime_error(path + ": unknown mesh format (expected .obj, .stl, .ply, .vtp or .vtk)");
     // Stems, not names: animate writes every mesh's frames as <stem>_NNNNN.vtp.
-    if (!names.insert(std::filesystem::path(path).stem().string()).second)
+    const std::string stem = std::filesystem::path(path).stem().string();
+    // pose writes posed_<name>, animate frames/<stem>_NNNNN.vtp: these stems are Repose's own outputs.
+    for (const char* own : {"surfaces", "mesh", "labels", "image", "displacement"})
+      if (stem == own)
+        throw UsageError("--mesh " + path + ": a mesh named '" + stem + "' would be written over Repose's own posed " +
+                         own + " (posed_" + own + ".*, frames/" + own + "_NNNNN.*); give the file another name");
+    if (!names.insert(stem).second)
       throw UsageError("two --mesh files are named " + std::filesystem::path(path).filename().string() +
                        " (their outputs would collide)");
   }

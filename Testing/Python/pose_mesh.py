@@ -182,5 +182,15 @@ for bad, why in ((f"{work}/missing.obj", "no such file"), (f"{work}/organ.xyz", 
           f"{os.path.basename(bad)}: {err.strip()}", failures)
     check(not os.path.exists(out_dir), "no output after the error", failures)
 
+# A mesh named as one of Repose's own outputs (the case's surfaces.vtp) would replace the posed surfaces.
+shutil.copy(f"{case}/surfaces.vtp", f"{work}/surfaces.vtp")
+for command in (["pose", "--pose", pose_path], ["animate", "--bvh", bvh, "--frames", "500:501"]):
+    out_dir = f"{work}/own_name"
+    code, out, err = run(command[0], "--case", case, *command[1:], "--mesh", f"{work}/surfaces.vtp", "--out", out_dir,
+                         check=False)
+    lines = err.strip().splitlines()
+    check(code == 2 and len(lines) == 1 and "surfaces.vtp" in lines[0] and "posed_surfaces" in lines[0]
+          and not os.path.exists(out_dir), f"{command[0]} --mesh surfaces.vtp is refused: {err.strip()}", failures)
+
 print(f"{len(checks) - len(failures)} passed, {len(failures)} failed")
 sys.exit(1 if failures else 0)
