@@ -68,4 +68,10 @@ PosedVolumeSampler::Volumes PosedVolumeSampler::sample(vtkPoints* posedNodes) {
   return v;
 }
 
+void PosedVolumeSampler::warmUp() {
+  auto restNodes = vtkSmartPointer<vtkPoints>::New();
+  restNodes->DeepCopy(restMesh_->GetPoints());
+  sample(restNodes);
+}
+
 }  // namespace repose

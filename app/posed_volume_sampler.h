@@ -35,6 +35,9 @@ class PosedVolumeSampler {
   /// not modified), or the rest volumes for null. Thread-safe: one call runs at a time. The returned
   /// images are the caller's; a later call does not change them. Throws std::runtime_error.
   Volumes sample(vtkPoints* posedNodes);
+  /// Does the rest-side work now (a resample through the rest pose), so that the first posed sample
+  /// takes as long as every later one. Meant for a background thread right after a case opens.
+  void warmUp();
 
  private:
   std::mutex mutex_;

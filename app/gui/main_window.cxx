@@ -551,6 +551,7 @@ void MainWindow::installCase(const OpenResult& result) {
   legend_->setCase(pipeline_->restSurfaces(), table_, skeleton);
   slices_->clear();  // a new case: the views fit its grid and centre the cursor
   slices_->setVolumes(pipeline_->restLabels(), restImage_, table_, boneLabels_);
+  newSliceSampler();
   slicesRoot_ = rootCentre();
   slicesDirty_ = false;
   setWindowTitle("Repose — " + title_);
@@ -674,6 +675,20 @@ void MainWindow::centreSlicesOnSelection() {
 
 // --- posed volumes in the background ---------------------------------------------------------
 
+void MainWindow::newSliceSampler() {
+  sliceSampler_ = std::make_shared<PosedVolumeSampler>(pipeline_->restLabels(), restImage_, pipeline_->restMesh());
+  // The rest-side work in the background now, not on the first pose's slice update (Visible Human
+  // female, 18.7 M voxels: 2.7 s there, 0.6 s for every later pose).
+  std::shared_ptr<PosedVolumeSampler> sampler = sliceSampler_;
+  static_cast<void>(QtConcurrent::run([sampler] {
+    try {
+      sampler->warmUp();
+    } catch (const std::exception&) {
+      // The slice update that follows reports the same error.
+    }
+  }));
+}
+
 void MainWindow::requestSliceUpdate() {
   if (!pipeline_) return;
   slicesDirty_ = true;
@@ -693,8 +708,7 @@ void MainWindow::startSliceUpdate() {
       posedNodes = vtkSmartPointer<vtkPoints>::New();
       posedNodes->DeepCopy(pipeline_->posedMesh()->GetPoints());
     }
-    if (!sliceSampler_)
-      sliceSampler_ = std::make_shared<PosedVolumeSampler>(pipeline_->restLabels(), restImage_, pipeline_->restMesh());
+    if (!sliceSampler_) newSliceSampler();
     sampler = sliceSampler_;
   } catch (const std::exception&) {
     return;

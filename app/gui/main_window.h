@@ -172,6 +172,7 @@ private:
   std::vector<int> boneLabels_;
   vtkSmartPointer<vtkImageData> restImage_;
   std::shared_ptr<PosedVolumeSampler> sliceSampler_;  // the case's posed volumes for the slice views
+  void newSliceSampler();
   QString title_;
   PreprocessWorker* worker_ = nullptr;
   FrameTiming timing_;

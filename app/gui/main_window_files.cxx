@@ -64,7 +64,7 @@ bool MainWindow::loadRestImage(const QString& path) {
     pipeline_->setRestImage(image, path.toStdString());
     sliceWatcher_.waitForFinished();
     restImage_ = image;
-    sliceSampler_.reset();  // the next slice update samples the new image
+    newSliceSampler();  // the slice updates sample the new image
     updateActions();
     requestSliceUpdate();
   });
