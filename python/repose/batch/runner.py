@@ -17,7 +17,8 @@ from .manifest import ManifestError, load_manifest
 from .plan import file_hash, plan_batch
 from .progress import Progress, duration
 
-USAGE = """repose batch MANIFEST --out DIR [--workers N | --scheduler ADDRESS] [--retry-failed] [--dry-run]"""
+USAGE = """repose batch MANIFEST --out DIR [--workers N | --scheduler ADDRESS] [--task-timeout SECONDS] [--retry-failed]
+       [--dry-run]"""
 DESCRIPTION = """Many subjects x many poses and BVH frames, on Dask. MANIFEST (YAML or JSON, see docs/batch.md)
 names the subjects (labels, optional CT, skeleton or auto, label table) and what to make of each (poses,
 clips with frame ranges, skinning, relaxation, outputs, format). Each subject is prepared once
@@ -34,6 +35,7 @@ WORKER_WAIT_SECONDS = 60  # the workers of a cluster just started (Slurm, Kubern
 CLUSTER_START_SECONDS = 120  # a local cluster whose worker died while starting never finishes starting (Dask)
 STALL_SECONDS = 120  # tasks pending while every worker is idle this long were lost by the cluster
 LOST_TRIES = 3  # submissions of a task the cluster keeps losing before it is reported failed
+TASK_TIMEOUT_SECONDS = 4 * 3600  # a task running longer hangs (the largest FEM poses take minutes)
 
 
 class UsageError(Exception):
@@ -55,11 +57,16 @@ def parse_args(argv):
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="an existing Dask scheduler (tcp://host:8786) instead of a local cluster; its workers need "
                         "this build at the same path, this package on PYTHONPATH and DIR on a shared file system")
+    p.add_argument("--task-timeout", type=float, default=TASK_TIMEOUT_SECONDS, metavar="SECONDS",
+                   help="a task running longer than this on a worker is stopped, its worker restarted and the task "
+                        f"recorded as failed (default {TASK_TIMEOUT_SECONDS} s; 0: no limit)")
     p.add_argument("--retry-failed", action="store_true", help="run again the tasks that failed before")
     p.add_argument("--dry-run", action="store_true", help="list what would run and what is complete, run nothing")
     args = p.parse_args(argv)
     if args.workers is not None and args.workers < 1:
         raise UsageError("--workers must be at least 1")
+    if not args.task_timeout >= 0:
+        raise UsageError("--task-timeout must be a number of seconds >= 0")
     if args.workers is not None and args.scheduler:
         raise UsageError("--workers is for the local cluster; a --scheduler has its own workers")
     return args
@@ -211,6 +218,7 @@ def _header(args, manifest, subjects, run):
             "manifest": {"path": manifest["path"], "sha256": file_hash(manifest["path"]), "content": manifest["data"]},
             "command": ["repose", "batch", *sys.argv[1:]],
             "settings": {"scheduler": args.scheduler or "local", "workers": run.get("workers"),
+                         "task_timeout_s": args.task_timeout,
                          "retry_failed": args.retry_failed},
             "subjects": subjects, "run": run}
 
@@ -256,6 +264,7 @@ def _collect(client, submitter, start, by_out, args, manifest, subjects, run, ou
     workers = set(client.scheduler_info()["workers"])
     pending = set(submitter.futures)
     watch = _StallWatch(client, submitter, progress)
+    timeout = _TaskTimeout(client, submitter, progress, args.task_timeout)
 
     def record(t, result):
         r = start[by_out[t["out"]]] = {**_describe(t), **result, "ran": "this"}
@@ -283,7 +292,7 @@ def _collect(client, submitter, start, by_out, args, manifest, subjects, run, ou
             except Exception as e:  # noqa: BLE001 - a worker lost too often (KilledWorker), a lost connection
                 result = {"status": "failed", "message": f"{type(e).__name__}: {' '.join(str(e).split())}"}
             record(submitter.futures[future], result)
-        for t, message in watch.check(pending):
+        for t, message in [*watch.check(pending), *timeout.check(pending)]:
             record(t, {"status": "failed", "message": message})
         if finished and time.monotonic() - last_write > 2:
             records.write_records(out_dir, _header(args, manifest, subjects, run), start)
@@ -320,6 +329,44 @@ class _StallWatch:
                                    f"for {STALL_SECONDS} s); submitted again")
                 pending.add(self.submitter.resubmit(future))
         return given_up
+
+
+class _TaskTimeout:
+    """A task processing on one worker for longer than `seconds` hangs there (the stall watch only sees
+    idle workers): it is cancelled and recorded failed, and its worker restarted (its nanny starts a
+    fresh process; any other task it held runs again elsewhere)."""
+
+    def __init__(self, client, submitter, progress, seconds):
+        self.client, self.submitter, self.progress, self.seconds = client, submitter, progress, seconds
+        self.since = {}  # (task key, worker) -> when it was first seen processing there
+
+    def check(self, pending):
+        """Updates `pending` in place; returns the (task, message) of tasks stopped."""
+        if not self.seconds or not pending:
+            return []
+        now = time.monotonic()
+        processing = {(key, worker) for worker, keys in self.client.processing().items() for key in keys}
+        self.since = {k: self.since.get(k, now) for k in processing}
+        by_key = {f.key: f for f in pending}
+        stopped, restart = [], set()
+        for (key, worker), start in sorted(self.since.items(), key=lambda kv: kv[1]):
+            future = by_key.get(key)
+            if future is None or now - start <= self.seconds or future not in pending:
+                continue
+            pending.discard(future)
+            self.client.cancel([future])
+            restart.add(worker)
+            t = self.submitter.futures[future]
+            stopped.append((t, f"ran for more than {self.seconds:g} s on worker {worker} (--task-timeout): stopped, "
+                               "its worker restarted"))
+            self.progress.note(f"batch: {t['subject']} {t['task']} ran for more than {self.seconds:g} s; stopped and "
+                               f"its worker {worker} restarted")
+        if restart:
+            try:
+                self.client.restart_workers(sorted(restart))
+            except Exception as e:  # noqa: BLE001 - no nanny (a worker started by hand): it stays busy
+                self.progress.note(f"batch: could not restart {', '.join(sorted(restart))}: {' '.join(str(e).split())}")
+        return stopped
 
 
 def main(argv):
