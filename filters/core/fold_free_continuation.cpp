@@ -39,6 +39,7 @@ class FoldFreePath {
   double s_ = 0.0, ds_ = 0.125;
   int rescues_ = 0;          // relaxing Newton solves after a stall
   double rescuedAt_ = -1.0;  // s of the last one
+  double paceAtRescue_ = 0.0;  // ... and the path's pace that called for it (continuation_stall.h)
   std::vector<double> sHistory_;  // s after each step since the start or the last rescue
 };
 
@@ -133,9 +134,12 @@ bool FoldFreePath::predict(double target, double& alpha) {
 // bones held) and the path tried again, a few times per path. A stall where the last rescue was made
 // (the path has not moved 1e-3 on since) is the same block: that rescue had relaxed the tissue here
 // already, so another finds the same minimum (medium phantom, 45 degree pose: rescues 2 and 3 at
-// s = 0.6279, after the first at 0.6276). Returns whether the path goes on.
+// s = 0.6279, after the first at 0.6276). Nor is it relaxed again when the last relaxation has not
+// sped the path up (continuationRelaxationPaid). Returns whether the path goes on.
 bool FoldFreePath::relaxHere() {
   if (rescues_ >= 3 || (rescuedAt_ >= 0.0 && s_ - rescuedAt_ < 1e-3)) return false;
+  if (rescuedAt_ >= 0.0 && !continuationRelaxationPaid(sHistory_, rescuedAt_, paceAtRescue_)) return false;
+  paceAtRescue_ = continuationPace(sHistory_, std::max(rescuedAt_, 0.0));
   ++rescues_;
   ++solve_.rep.continuationRescues;
   rescuedAt_ = s_;
