@@ -1,6 +1,6 @@
 #pragma once
 // Rigid paths of the bone (Dirichlet) nodes from the rest shape to a pose: the load path of the
-// fold-free continuation in corotational_fem.cpp.
+// fold-free continuation (fold_free_continuation.h).
 #include <Eigen/Geometry>
 #include <vector>
 

@@ -156,10 +156,10 @@ struct CorotationalOptions {
   /// accepted fraction otherwise); the direct result is kept if the path is not completed. Where the
   /// path stalls (at the pace of its last 20 steps it would need more than twice this budget in
   /// all, or a step falls below 1e-6 of it), the tissue is first relaxed there (Newton
-  /// with the bones held, at most 3 times per path, and not again where the path has not moved 1e-3
-  /// since): carried by predictors alone it can block the way (walk frame 192, tiny phantom, whole
-  /// mesh at once, with the line search of an earlier release: stalled at s = 0.45, completed after
-  /// one such solve).
+  /// with the bones held, at most 3 times per path, not again where the path has not moved 1e-3
+  /// since, nor after a relaxation that did not speed the path up, see continuation_stall.h): carried
+  /// by predictors alone it can block the way (walk frame 192, tiny phantom, whole mesh at once, with
+  /// the line search of an earlier release: stalled at s = 0.45, completed after one such solve).
   int maxContinuationSteps = 200;
   /// ... and this many Newton corrections per intermediate step (the last one gets
   /// maxNewtonIterations). The predictor is itself a Newton step of the moved problem (it also takes
