@@ -9,7 +9,6 @@
 
 #include "ReposeImageConversion.h"
 #include "atomic_outputs.h"
-#include "cli_options.h"
 #include "label_table_fit.h"
 
 namespace repose {
@@ -37,10 +36,10 @@ LabelTable readLabelTable(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-LabelTableChoice chooseLabelTable(const std::string& labelsPath, const Options& o) {
+LabelTableChoice chooseLabelTable(const std::string& labelsPath, const std::string& labelTablePath) {
   LabelTableChoice c;
-  if (o.has("label-table")) {
-    c.path = o.get("label-table");
+  if (!labelTablePath.empty()) {
+    c.path = labelTablePath;
     c.text = readTextFile(c.path);
     c.table = readLabelTable(c.path, c.text);
     c.origin = c.path;
@@ -75,8 +74,8 @@ void requireTableFits(vtkImageData* labels, const std::string& labelsPath, const
                            "; give the volume's own label table with --label-table");
 }
 
-std::string caseLabelTable(vtkImageData* labels, const std::string& labelsPath, const Options& o) {
-  const LabelTableChoice c = chooseLabelTable(labelsPath, o);
+std::string caseLabelTable(vtkImageData* labels, const std::string& labelsPath, const std::string& labelTablePath) {
+  const LabelTableChoice c = chooseLabelTable(labelsPath, labelTablePath);
   if (!c.path.empty()) {
     std::cout << "label table: " << c.origin << std::endl;
     return labelTableToTsv(c.table);

@@ -9,8 +9,6 @@ class vtkImageData;
 
 namespace repose {
 
-class Options;
-
 struct LabelTableChoice {
   LabelTable table;
   std::string text;    // the file's text; empty for the built-in names
@@ -18,10 +16,10 @@ struct LabelTableChoice {
   std::string origin;  // for the console
 };
 
-/// --label-table, else the first table beside labelsPath that holds one (see labelTablesBeside;
+/// labelTablePath (--label-table; "" = none given), else the first table beside labelsPath that holds one (see labelTablesBeside;
 /// a NAME.txt that holds none is skipped with a note), else the built-in TotalSegmentator names.
 /// Throws std::runtime_error "FILE: ..." for a table file that holds no labels.
-LabelTableChoice chooseLabelTable(const std::string& labelsPath, const Options& o);
+LabelTableChoice chooseLabelTable(const std::string& labelsPath, const std::string& labelTablePath);
 
 /// A table whose bone names contradict where the bones lie is the wrong table: throws
 /// std::runtime_error saying so, naming the table and the volume.
@@ -30,6 +28,6 @@ void requireTableFits(vtkImageData* labels, const std::string& labelsPath, const
 /// The label table kept in a case prepared from a hand-written skeleton, as TSV: the chosen table;
 /// the built-in TotalSegmentator names (of the values present) only when they fit the volume; else ""
 /// (the case then names its labels label_<value>, see Pipeline::saveCase). Says which on stdout.
-std::string caseLabelTable(vtkImageData* labels, const std::string& labelsPath, const Options& o);
+std::string caseLabelTable(vtkImageData* labels, const std::string& labelsPath, const std::string& labelTablePath);
 
 }  // namespace repose

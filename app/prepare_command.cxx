@@ -7,7 +7,7 @@
 
 #include "atomic_outputs.h"
 #include "cli_options.h"
-#include "label_table_choice.h"
+#include "scan_preparation.h"
 #include "output_guard.h"
 #include "pipeline_report.h"
 #include "repose_pipeline.h"
@@ -79,24 +79,19 @@ int runPrepareCommand(int argc, char** argv, int first) {
                           {{labelsPath, skeletonPath, o.get("image"), o.get("label-table")}, {}});
   Pipeline pipeline;
   pipeline.setProgress([](const std::string& s) { std::cout << "prepare: " << s << "..." << std::endl; });
-  vtkSmartPointer<vtkImageData> labels = readLabelVolume(labelsPath);
-  std::string skeletonJson, tableTsv;
-  if (skeletonPath == "auto") {
-    std::cout << "prepare: finding the skeleton from the bone labels..." << std::endl;
-    const RigResult r = rigLabels(labels, labelsPath, o);
-    std::cout << r.report;
-    labels = r.labels;
-    skeletonJson = r.skeletonJson;
-    tableTsv = r.tableTsv;
-  } else {
-    skeletonJson = readTextFile(skeletonPath);
-    tableTsv = caseLabelTable(labels, labelsPath, o);
-  }
-  vtkSmartPointer<vtkImageData> image;
-  if (o.has("image")) image = readIntensityImage(o.get("image"), o.get("series-uid"));
-  pipeline.setLabelTableTsv(tableTsv);
-  prepareCase(pipeline, labels, labelsPath, skeletonJson, skeletonPath == "auto" ? "automatic skeleton" : skeletonPath,
-              image, o.get("image"), o, caseDir, ext);
+  ScanSource source;
+  source.labelsPath = labelsPath;
+  source.skeletonPath = skeletonPath;
+  source.labelTablePath = o.get("label-table");
+  source.imagePath = o.get("image");
+  source.seriesUid = o.get("series-uid");
+  source.maxGapMm = o.number("max-gap", 6);
+  const ScanForPreparation scan =
+      readScanForPreparation(source, [](const std::string& s) { std::cout << "prepare: " << s << "..." << std::endl; });
+  std::cout << scan.rigReport;
+  pipeline.setLabelTableTsv(scan.tableTsv);
+  prepareCase(pipeline, scan.labels, labelsPath, scan.skeletonJson, scan.skeletonName, scan.image, source.imagePath, o,
+              caseDir, ext);
   std::cout << "prepared case written to " << caseDir << " (label table: " << caseDir << "/labels.tsv)\n";
   printTimings(pipeline);
   return 0;

@@ -10,7 +10,7 @@
 
 #include "atomic_outputs.h"
 #include "cli_options.h"
-#include "label_table_choice.h"
+#include "scan_preparation.h"
 #include "output_guard.h"
 #include "repose_pipeline.h"
 #include "vtkReposeAutoRig.h"
@@ -41,34 +41,6 @@ const char* kRigUsage =
 
 }  // namespace
 
-RigResult rigLabels(vtkImageData* labels, const std::string& labelsName, const Options& o) {
-  const LabelTableChoice table = chooseLabelTable(labelsName, o);
-  requireTableFits(labels, labelsName, table);
-  auto rig = vtkSmartPointer<vtkReposeAutoRig>::New();
-  rig->SetInputData(labels);
-  rig->SetLabelTableTSV(table.text.c_str());
-  rig->SetLabelTableName(table.origin.c_str());  // the report's "label table:" line
-  rig->CheckLabelTableOff();  // checked above, with the file names
-  if (o.has("max-gap")) rig->SetMaxGapMm(o.number("max-gap", 6));
-  const std::string what = "automatic skeleton of " + labelsName;
-  updateOrThrow(rig, what);
-  RigResult r;
-  r.labels = vtkSmartPointer<vtkImageData>::New();
-  r.labels->ShallowCopy(rig->GetOutput());
-  r.skeletonJson = rig->GetSkeletonJSON();
-  r.report = rig->GetReport();
-  r.tableTsv = rig->GetOutputLabelTableTSV();
-  if (rig->GetNumberOfJoints() < 2)
-    throw std::runtime_error(labelsName + ": the automatic skeleton found " + std::to_string(rig->GetNumberOfJoints()) +
-                             " joint(s) with the label table " + (table.path.empty() ? "of TotalSegmentator" : table.path) +
-                             "; name the bones with --label-table or write skeleton.json by hand");
-  vtkDataArray* a = labels->GetPointData()->GetScalars();
-  vtkDataArray* b = r.labels->GetPointData()->GetScalars();
-  for (vtkIdType i = 0, n = a->GetNumberOfTuples(); i < n && !r.relabelled; ++i)
-    r.relabelled = a->GetTuple1(i) != b->GetTuple1(i);
-  return r;
-}
-
 int runRigCommand(int argc, char** argv, int first) {
   const Options o(argc, argv, first, {"labels", "label-table", "out", "max-gap"}, {});
   if (o.help) return std::cout << kRigUsage, 0;
@@ -79,7 +51,7 @@ int runRigCommand(int argc, char** argv, int first) {
   refuseOutputsOverInputs(dir, {out.filename().string(), "labels_rigged.nii.gz", "labels_rigged.tsv"},
                           {{labelsPath, o.get("label-table")}, {}});
   auto labels = readLabelVolume(labelsPath);
-  const RigResult r = rigLabels(labels, labelsPath, o);
+  const RigResult r = rigLabels(labels, labelsPath, o.get("label-table"), o.number("max-gap", 6));
   AtomicOutputs files(dir);
   writeTextFile(files.stage(out.filename().string()), r.skeletonJson);
   if (r.relabelled) {

@@ -11,7 +11,7 @@
 
 #include "atomic_outputs.h"
 #include "phantom.h"
-#include "vtkReposeAutoRig.h"
+#include "scan_preparation.h"
 #include "vtkReposePhantomSource.h"
 
 namespace repose {
@@ -99,51 +99,25 @@ void PreprocessWorker::open() {
     result_.title = "Phantom (" + request_.phantomSize + ")";
   } else {
     const std::string labelsPath = request_.labelsPath.toStdString();
-    steps_ = 5 + (request_.autoSkeleton ? 1 : 0) + (save ? 1 : 0);
+    steps_ = 5 + (request_.autoSkeleton ? 1 : 0) + (request_.imagePath.isEmpty() ? 0 : 1) + (save ? 1 : 0);
     stage("reading " + QFileInfo(request_.labelsPath).fileName());
-    vtkSmartPointer<vtkImageData> labels = readLabelVolume(labelsPath);
-    vtkSmartPointer<vtkImageData> image;
-    if (!request_.imagePath.isEmpty()) {
-      image = readIntensityImage(request_.imagePath.toStdString());
-      checkSameGrid(labels, labelsPath, image, request_.imagePath.toStdString());
+    // As `repose prepare` reads it: the same table choice, rig and grid checks.
+    ScanSource source;
+    source.labelsPath = labelsPath;
+    source.labelTablePath = request_.labelTablePath.toStdString();
+    source.imagePath = request_.imagePath.toStdString();
+    if (!request_.autoSkeleton) {
+      if (request_.skeletonPath.isEmpty()) throw std::runtime_error("choose a skeleton.json or the automatic skeleton");
+      source.skeletonPath = request_.skeletonPath.toStdString();
     }
-    std::string tableTsv;
-    if (!request_.labelTablePath.isEmpty()) {
-      tableTsv = readTextFile(request_.labelTablePath.toStdString());
-      try {
-        result_.table = parseLabelTable(tableTsv, request_.labelTablePath.toStdString());
-      } catch (const std::invalid_argument& e) {
-        throw std::runtime_error(e.what());
-      }
-    }
-    std::string skeletonJson, skeletonName;
-    if (request_.autoSkeleton) {
-      stage("finding the skeleton from the bone labels");
-      auto rig = vtkSmartPointer<vtkReposeAutoRig>::New();
-      rig->SetInputData(labels);
-      if (!tableTsv.empty()) rig->SetLabelTableTSV(tableTsv.c_str());
-      updateOrThrow(rig, "automatic skeleton of " + labelsPath);
-      if (rig->GetNumberOfJoints() < 2)
-        throw std::runtime_error(labelsPath + ": the automatic skeleton found " + std::to_string(rig->GetNumberOfJoints()) +
-                                 " joint(s); give a label table or a skeleton.json");
-      auto relabelled = vtkSmartPointer<vtkImageData>::New();
-      relabelled->ShallowCopy(rig->GetOutput());
-      labels = relabelled;
-      skeletonJson = rig->GetSkeletonJSON();
-      skeletonName = "automatic skeleton";
-      if (rig->GetOutputLabelTableTSV() && *rig->GetOutputLabelTableTSV())
-        result_.table = parseLabelTable(rig->GetOutputLabelTableTSV(), "automatic skeleton's label table");
-    } else {
-      if (request_.skeletonPath.isEmpty())
-        throw std::runtime_error("choose a skeleton.json or the automatic skeleton");
-      skeletonName = request_.skeletonPath.toStdString();
-      skeletonJson = readTextFile(skeletonName);
-    }
-    pipeline->prepare(labels, labelsPath, skeletonJson, skeletonName, image, request_.imagePath.toStdString(),
+    const ScanForPreparation scan =
+        readScanForPreparation(source, [&](const std::string& text) { stage(QString::fromStdString(text)); });
+    if (!scan.tableTsv.empty()) result_.table = parseLabelTable(scan.tableTsv, labelsPath + " label table");
+    pipeline->prepare(scan.labels, labelsPath, scan.skeletonJson, scan.skeletonName, scan.image, source.imagePath,
                       request_.settings);
-    if (image) {
-      pipeline->setRestImage(image, request_.imagePath.toStdString());
-      result_.image = image;
+    if (scan.image) {
+      pipeline->setRestImage(scan.image, source.imagePath);
+      result_.image = scan.image;
     }
     result_.title = QFileInfo(request_.labelsPath).fileName();
   }
