@@ -34,11 +34,13 @@
 #include <exception>
 #include <limits>
 #include <map>
+#include <set>
 
 #include "body_mask.h"
 #include "image_grid.h"
 #include "skeleton.h"
 #include "array_names.h"
+#include "label_boxes.h"
 
 vtkStandardNewMacro(vtkReposeSurfaceExtractor);
 
@@ -269,55 +271,25 @@ int vtkReposeSurfaceExtractor::RequestData(
         return 0;
       }
       const repose::Skeleton skeleton = repose::parseSkeletonJson(this->SkeletonJSON);
-      // Bounding box of every label in one pass, so each bone is contoured on its own crop.
-      std::map<int, std::array<int, 6>> boxes;
+      // Each bone contoured on its own crop (labels above kMaxBoxedLabel: on the whole grid).
+      const std::vector<Eigen::AlignedBox3i> boxes = repose::labelBoxes(labels);
+      const Eigen::AlignedBox3i wholeGrid(Eigen::Vector3i::Zero(),
+        Eigen::Vector3i(labels.grid.dims[0] - 1, labels.grid.dims[1] - 1, labels.grid.dims[2] - 1));
+      std::set<int> boneLabels;
       for (const auto& joint : skeleton.joints)
       {
-        for (int label : joint.labels)
-        {
-          boxes[label] = { std::numeric_limits<int>::max(), -1, std::numeric_limits<int>::max(), -1,
-            std::numeric_limits<int>::max(), -1 };
-        }
+        boneLabels.insert(joint.labels.begin(), joint.labels.end());
       }
-      const auto& dims = labels.grid.dims;
-      for (int k = 0; k < dims[2]; ++k)
+      for (const int label : boneLabels)
       {
-        for (int j = 0; j < dims[1]; ++j)
-        {
-          for (int i = 0; i < dims[0]; ++i)
-          {
-            auto it = boxes.find(labels.at(i, j, k));
-            if (it == boxes.end())
-            {
-              continue;
-            }
-            auto& b = it->second;
-            b = { std::min(b[0], i), std::max(b[1], i), std::min(b[2], j), std::max(b[3], j),
-              std::min(b[4], k), std::max(b[5], k) };
-          }
-        }
-      }
-      for (const auto& [label, b] : boxes)
-      {
-        if (b[1] < 0)
+        const Eigen::AlignedBox3i box = boxes.empty() ? wholeGrid
+          : (label > 0 && static_cast<std::size_t>(label) < boxes.size() ? boxes[static_cast<std::size_t>(label)]
+                                                                         : Eigen::AlignedBox3i());
+        const repose::MaskVolume crop = repose::labelCrop(labels, label, box);
+        if (std::find(crop.data.begin(), crop.data.end(), 1) == crop.data.end())
         {
           vtkWarningMacro("bone label " << label << " does not occur in the label image");
           continue;
-        }
-        repose::MaskVolume crop;
-        crop.grid = labels.grid;
-        crop.grid.dims = { b[1] - b[0] + 1, b[3] - b[2] + 1, b[5] - b[4] + 1 };
-        crop.grid.origin = labels.grid.indexToPhysical(Eigen::Vector3d(b[0], b[2], b[4]));
-        crop.data.resize(crop.grid.voxelCount());
-        for (int k = b[4]; k <= b[5]; ++k)
-        {
-          for (int j = b[2]; j <= b[3]; ++j)
-          {
-            for (int i = b[0]; i <= b[1]; ++i)
-            {
-              crop.at(i - b[0], j - b[2], k - b[4]) = labels.at(i, j, k) == label ? 1 : 0;
-            }
-          }
         }
         addSurface(repose_vtk::ToImage(crop), label);
       }

@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "label_boxes.h"
 #include "parallel_for.h"
 
 namespace repose {
@@ -81,31 +82,7 @@ std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const
 std::vector<Eigen::AlignedBox3i> restLabelBoxes(const LabelVolume& rest) {
   if (rest.data.size() != rest.grid.voxelCount())
     throw std::invalid_argument("rigid bones: volume sizes do not match their grids");
-  std::int32_t maxLabel = 0;
-  for (const std::int32_t l : rest.data) maxLabel = std::max(maxLabel, l);
-  if (maxLabel > kMaxBoxedLabel) return {};
-  const auto& rd = rest.grid.dims;
-  // Fixed chunks of slices in parallel, then merged.
-  const std::size_t nLabels = std::size_t(maxLabel) + 1;
-  const std::size_t nChunks = std::max<std::size_t>(1, std::min<std::size_t>(64, std::size_t(rd[2])));
-  std::vector<std::vector<Eigen::AlignedBox3i>> chunkBox(nChunks);
-  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    for (std::size_t c = cb; c < ce; ++c) {
-      auto& box = chunkBox[c];
-      box.resize(nLabels);
-      for (int k = int(c * std::size_t(rd[2]) / nChunks); k < int((c + 1) * std::size_t(rd[2]) / nChunks); ++k)
-        for (int j = 0; j < rd[1]; ++j) {
-          const std::int32_t* row = rest.data.data() + rest.grid.linearIndex(0, j, k);
-          for (int i = 0; i < rd[0]; ++i)
-            if (row[i] > 0) box[std::size_t(row[i])].extend(Eigen::Vector3i(i, j, k));
-        }
-    }
-  }, 1);
-  std::vector<Eigen::AlignedBox3i> boxes(nLabels);
-  for (const auto& box : chunkBox)
-    for (std::size_t l = 0; l < nLabels; ++l)
-      if (!box[l].isEmpty()) boxes[l].extend(box[l]);
-  return boxes;
+  return labelBoxes(rest);
 }
 
 std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "image_grid.h"
+#include "label_boxes.h"
 #include "tet_mesh.h"
 
 namespace repose {
@@ -31,10 +32,8 @@ std::size_t overlayRigidBones(LabelVolume& posed, const LabelVolume& rest, const
 std::size_t overlayRigidBones(std::int32_t* posedData, const ImageGrid& posedGrid, const LabelVolume& rest,
                               const std::vector<RigidBone>& bones);
 
-/// Index-space bounding box of every positive label value of `rest` (entry l for value l; empty boxes
-/// for values not present). Depends on the rest labels only, so compute it once and pass it to
-/// overlayRigidBones for every pose. Empty (not usable) if a label exceeds kMaxBoxedLabel.
-constexpr std::int32_t kMaxBoxedLabel = 1 << 20;
+/// labelBoxes(rest) (label_boxes.h): it depends on the rest labels only, so compute it once and pass
+/// it to overlayRigidBones for every pose.
 std::vector<Eigen::AlignedBox3i> restLabelBoxes(const LabelVolume& rest);
 /// Same as above with the rest bounding boxes from restLabelBoxes(rest) (null or empty: scanned here).
 /// contestedVoxels (optional) receives the number of posed voxels that two bones' rigid motions both
