@@ -22,6 +22,7 @@
 #include "array_names.h"
 
 #include <algorithm>
+#include <string>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -36,6 +37,9 @@ struct vtkReposeSkinning::Internals
   repose::SkinningCache Cache;  // float rest positions and sorted weights
   // Output points, reused while the node count is unchanged (no allocation or page faults per pose).
   vtkSmartPointer<vtkPoints> Posed;
+  // The skeleton parsed from SkeletonJSON, kept while the text is the same.
+  std::string SkeletonText;
+  repose::Skeleton Skeleton;
 
   void Convert(vtkUnstructuredGrid* input)
   {
@@ -106,10 +110,15 @@ int vtkReposeSkinning::RequestData(
   {
     if (!this->SkeletonJSON || !*this->SkeletonJSON)
       throw std::invalid_argument("SkeletonJSON is not set");
-    const repose::Skeleton skeleton = repose::parseSkeletonJson(this->SkeletonJSON);
-    const repose::Pose pose = (this->PoseJSON && *this->PoseJSON)
-      ? repose::parsePoseJson(this->PoseJSON)
-      : repose::Pose{};
+    if (in.SkeletonText != this->SkeletonJSON)
+    {
+      in.SkeletonText.clear();
+      in.Skeleton = repose::parseSkeletonJson(this->SkeletonJSON);
+      in.SkeletonText = this->SkeletonJSON;
+    }
+    const repose::Skeleton& skeleton = in.Skeleton;
+    const repose::Pose pose =
+      (this->PoseJSON && *this->PoseJSON) ? repose::parsePoseJson(this->PoseJSON) : repose::Pose{};
     const std::vector<Eigen::Isometry3d> bones = repose::forwardKinematics(skeleton, pose);
 
     this->LastRunUsedCache = in.CachedInput == input && in.CachedInputTime == input->GetMTime();
