@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <map>
 #include <numeric>
 #include <random>
 #include <cmath>
@@ -69,6 +70,41 @@ bool hasNode(const TetMesh& m, const Eigen::Vector3d& p, double tol = 1e-9) {
   for (Eigen::Index v = 0; v < m.nodes.rows(); ++v)
     if ((m.nodes.row(v).transpose() - p).norm() < tol) return true;
   return false;
+}
+
+/// The box from lo to hi with each face split into n x n squares of two triangles: many coplanar
+/// facets, whose shared edges TetGen's constrained Delaunay stage splits.
+void latticeBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int n, Points& V, Triangles& F) {
+  std::map<std::array<int, 3>, int> index;
+  std::vector<Eigen::Vector3d> points;
+  auto vertex = [&](const std::array<int, 3>& ijk) {
+    auto inserted = index.emplace(ijk, int(points.size()));
+    if (inserted.second)
+      points.push_back(lo + Eigen::Vector3d(ijk[0], ijk[1], ijk[2]).cwiseProduct(hi - lo) / n);
+    return inserted.first->second;
+  };
+  std::vector<Eigen::RowVector3i> triangles;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side <= 1; ++side)
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+          int q[4];
+          const int da[4] = {0, 1, 1, 0}, db[4] = {0, 0, 1, 1};
+          for (int c = 0; c < 4; ++c) {
+            std::array<int, 3> ijk;
+            ijk[axis] = side * n;
+            ijk[(axis + 1) % 3] = a + da[c];
+            ijk[(axis + 2) % 3] = b + db[c];
+            q[c] = vertex(ijk);
+          }
+          if (side == 0) std::swap(q[1], q[3]);  // outward
+          triangles.emplace_back(q[0], q[1], q[2]);
+          triangles.emplace_back(q[0], q[2], q[3]);
+        }
+  V.resize(Eigen::Index(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i) V.row(Eigen::Index(i)) = points[i].transpose();
+  F.resize(Eigen::Index(triangles.size()), 3);
+  for (std::size_t i = 0; i < triangles.size(); ++i) F.row(Eigen::Index(i)) = triangles[i];
 }
 
 }  // namespace
@@ -347,6 +383,37 @@ TEST(TetMesher, TwoDisjointCubes) {
   TetMesh none = m;
   none.fixedBone.assign(std::size_t(m.nodes.rows()), -1);
   EXPECT_THROW(keepBoneComponents(none), std::invalid_argument);
+}
+
+// The surface kept (-Y) while the constrained Delaunay stage splits segments: TetGen then needs the
+// index of each split segment, which it records only when told to; without it this surface read
+// uninitialised memory and crashed, typically after another run in the same process.
+TEST(TetMesher, LatticeBoxMeshedRepeatedlyInOneProcess) {
+  Points V;
+  Triangles F;
+  latticeBox({0, 0, 0}, {28, 10, 10}, 12, V, F);
+  ASSERT_EQ(F.rows(), 6 * 12 * 12 * 2);
+  Points seeds(8, 3);
+  for (int s = 0; s < 8; ++s) seeds.row(s) << 3 + 3 * s, 5, 5;
+  TetMesh first;
+  for (int run = 0; run < 8; ++run) {
+    TetMeshingReport rep;
+    const TetMesh m = tetrahedralizeSurface(V, F, seeds, TetMeshingOptions{}, &rep);
+    EXPECT_TRUE(rep.surfacePreserved) << rep.preserveFailure;
+    ASSERT_GT(m.tets.rows(), 0);
+    expectPositive(m);
+    EXPECT_NEAR(meshVolume(m.nodes, m.tets), 28.0 * 10 * 10, 1e-9 * 2800);
+    EXPECT_GE(m.nodes.minCoeff(), -1e-9);
+    EXPECT_LE(m.nodes.col(0).maxCoeff(), 28 + 1e-9);
+    EXPECT_LE(m.nodes.rightCols(2).maxCoeff(), 10 + 1e-9);
+    if (run == 0) {
+      for (Eigen::Index v = 0; v < V.rows(); ++v) EXPECT_TRUE(hasNode(m, V.row(v).transpose())) << v;
+      first = m;
+    } else {  // the same input gives the same mesh
+      EXPECT_EQ(m.nodes, first.nodes);
+      EXPECT_EQ(m.tets, first.tets);
+    }
+  }
 }
 
 TEST(TetMesher, BadSurfaceThrows) {

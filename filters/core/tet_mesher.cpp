@@ -63,11 +63,16 @@ void checkClosedSurface(const Triangles& F) {
 // the Delaunay property around them; both are skipped: those points stay, the surface is unchanged.
 // Seeds are passed as isolated input points, not with -i: 1.5.0's insertconstrainedpoints() can walk
 // off the carved mesh and crash.
+// With -Y, tetrahedralize() recovers the boundary without splitting segments, so initializepools()
+// leaves useinsertradius off and a split segment would not inherit its segment index; the constrained
+// Delaunay stage run here does split segments and then reads that index (uninitialised: wrong Steiner
+// points or a crash). Setting it first gives the pools the layout and bookkeeping of the -p path.
 void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
   auto* m = new tetgenmesh();
   try {
     m->b = &b;
     m->in = &in;
+    m->useinsertradius = 1;
     m->initializepools();
     m->transfernodes();
     exactinit(b.verbose, b.noexact, b.nostaticfilter, m->xmax - m->xmin, m->ymax - m->ymin, m->zmax - m->zmin);
