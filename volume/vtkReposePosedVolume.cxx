@@ -16,9 +16,8 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnstructuredGrid.h"
 
+#include "pull_resample_cache.h"
 #include "resample_pull.h"
-#include "rigid_bone_overlay.h"
-#include "tet_boundary.h"
 #include "ReposeMeshConversion.h"
 #include "array_names.h"
 
@@ -31,41 +30,42 @@
 
 vtkStandardNewMacro(vtkReposePosedVolume);
 
+namespace
+{
+// The newest MTime of a rest mesh's cells and cell types: its topology changed since.
+vtkMTimeType TopologyTime(vtkUnstructuredGrid* mesh)
+{
+  vtkCellArray* cells = mesh->GetCells();
+  return std::max(cells ? cells->GetMTime() : 0,
+    mesh->GetCellTypesArray() ? mesh->GetCellTypesArray()->GetMTime() : 0);
+}
+}
+
+// The rest inputs converted for the core, with what they were converted from: an input is set again
+// in the cache only when its VTK object or MTime changed.
 struct vtkReposePosedVolume::Internals
 {
-  // Boundary of the rest mesh's tets, and what it was computed from.
-  std::unique_ptr<repose::TetBoundary> Boundary;
+  repose::PullResampleCache Cache;
   vtkCellArray* Cells = nullptr;
   vtkMTimeType CellsTime = 0;
   vtkIdType NumberOfCells = -1;
-  // Rest-grid voxels inside the rest mesh, and the rest points and grid it was computed for.
-  std::unique_ptr<repose::MaskVolume> Coverage;
-  std::unique_ptr<repose::MaskVolume> Distance;  // restMeshDistance(Coverage)
-  vtkMTimeType CoverageTime = 0;
-  // Rest tets (same key as the boundary, plus the cell types).
-  repose::Tets Tets;
-  vtkCellArray* TetsCells = nullptr;
-  vtkMTimeType TetsTime = 0;
-  vtkIdType TetsCount = -1;
-  // Rest nodes, and the points they were converted from.
-  repose::Points RestNodes;
   vtkPoints* RestPoints = nullptr;
   vtkMTimeType RestPointsTime = 0;
-  // Rest scalars as core volumes (one of the two), and the array they were converted from.
-  repose::LabelVolume Labels;
-  repose::IntensityVolume Values;
   vtkDataArray* Scalars = nullptr;
   vtkMTimeType ScalarsTime = 0;
-  int ScalarsKind = -1;
-  // Rest label boxes for the rigid-bone overlay (follow Labels; unset until first needed).
-  std::unique_ptr<std::vector<Eigen::AlignedBox3i>> LabelBoxes;
-  std::array<int, 3> LabelBoxesDims = { { -1, -1, -1 } };
-  // The last label output array, for reuse by the next pose.
-  vtkSmartPointer<vtkIntArray> LastLabels;
-  // Fixed bone per rest node, and the array it was converted from.
-  std::vector<int> FixedBone;
+  int ScalarsKind = -1;  // 0 labels, 1 intensities
   vtkDataArray* FixedArray = nullptr;
   vtkMTimeType FixedTime = 0;
+  std::size_t FixedSize = 0;
+  // The last label output array, for reuse by the next pose.
+  vtkSmartPointer<vtkIntArray> LastLabels;
+
+  void UpdateTets(vtkUnstructuredGrid* mesh);
+  void UpdateRestNodes(vtkPoints* points);
+  void UpdateScalars(vtkDataArray* scalars, int kind);
+  void UpdateFixedBone(vtkDataArray* fixed);
+  // An int array of `voxels` tuples for the labels, the last pose's when it can be reused.
+  vtkIntArray* LabelArray(vtkImageData* output, vtkIdType voxels);
 };
 
 namespace
@@ -154,6 +154,72 @@ void GridToArrays(const repose::ImageGrid& g, int ext[6], double origin[3], doub
     }
   }
 }
+}
+
+void vtkReposePosedVolume::Internals::UpdateTets(vtkUnstructuredGrid* mesh)
+{
+  vtkCellArray* cells = mesh->GetCells();
+  const vtkMTimeType time = TopologyTime(mesh);
+  if (this->Cells != cells || this->CellsTime != time || this->NumberOfCells != mesh->GetNumberOfCells())
+  {
+    this->Cells = nullptr;
+    this->Cache.setTets(repose_vtk::ToTets(mesh, "rest mesh"));
+    this->Cells = cells;
+    this->CellsTime = time;
+    this->NumberOfCells = mesh->GetNumberOfCells();
+  }
+}
+
+void vtkReposePosedVolume::Internals::UpdateRestNodes(vtkPoints* points)
+{
+  if (this->RestPoints != points || !points || this->RestPointsTime != points->GetMTime())
+  {
+    this->RestPoints = nullptr;
+    this->Cache.setRestNodes(repose_vtk::ToPoints(points));
+    this->RestPoints = points;
+    this->RestPointsTime = points ? points->GetMTime() : 0;
+  }
+}
+
+void vtkReposePosedVolume::Internals::UpdateScalars(vtkDataArray* scalars, int kind)
+{
+  if (this->Scalars != scalars || this->ScalarsTime != scalars->GetMTime() || this->ScalarsKind != kind)
+  {
+    this->Scalars = nullptr;
+    if (kind == 0)
+    {
+      std::vector<std::int32_t> labels;
+      CopyScalars(scalars, labels);
+      this->Cache.setLabels(std::move(labels));
+    }
+    else
+    {
+      std::vector<float> values;
+      CopyScalars(scalars, values);
+      this->Cache.setIntensities(std::move(values));
+    }
+    this->Scalars = scalars;
+    this->ScalarsTime = scalars->GetMTime();
+    this->ScalarsKind = kind;
+  }
+}
+
+void vtkReposePosedVolume::Internals::UpdateFixedBone(vtkDataArray* fixed)
+{
+  const std::size_t n = static_cast<std::size_t>(fixed->GetNumberOfTuples());
+  if (this->FixedArray != fixed || this->FixedTime != fixed->GetMTime() || this->FixedSize != n)
+  {
+    this->FixedArray = nullptr;
+    std::vector<int> bone(n);
+    for (std::size_t v = 0; v < n; ++v)
+    {
+      bone[v] = static_cast<int>(fixed->GetTuple1(static_cast<vtkIdType>(v)));
+    }
+    this->Cache.setFixedBone(std::move(bone));
+    this->FixedArray = fixed;
+    this->FixedTime = fixed->GetMTime();
+    this->FixedSize = n;
+  }
 }
 
 vtkReposePosedVolume::vtkReposePosedVolume()
@@ -290,26 +356,20 @@ int vtkReposePosedVolume::RequestData(
     const repose::ImageGrid rest = GridFromInfo(ext, image->GetOrigin(), image->GetSpacing(), direction);
     // Rest-side conversions are cached: between poses only the posed nodes change.
     Internals& in = *this->Internal;
-    vtkCellArray* cells = restMesh->GetCells();
-    const vtkMTimeType cellsTime = std::max(cells ? cells->GetMTime() : 0,
-      restMesh->GetCellTypesArray() ? restMesh->GetCellTypesArray()->GetMTime() : 0);
-    if (in.TetsCells != cells || in.TetsTime != cellsTime || in.TetsCount != restMesh->GetNumberOfCells())
+    in.UpdateTets(restMesh);
+    in.UpdateRestNodes(restMesh->GetPoints());
+    in.Cache.setRestGrid(rest);
+    const int kind = this->Interpolation == Nearest ? 0 : 1;
+    if (!this->OutputDisplacement)
     {
-      in.TetsCells = nullptr;
-      in.Tets = repose_vtk::ToTets(restMesh, "rest mesh");
-      in.TetsCells = cells;
-      in.TetsTime = cellsTime;
-      in.TetsCount = restMesh->GetNumberOfCells();
+      in.UpdateScalars(scalars, kind);
     }
-    const repose::Tets& tets = in.Tets;
-    vtkPoints* restPoints = restMesh->GetPoints();
-    if (in.RestPoints != restPoints || !restPoints || in.RestPointsTime != restPoints->GetMTime())
+    vtkDataArray* fixed = restMesh->GetPointData()->GetArray(repose::arrays::kFixedBone);
+    const bool rigid = this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints();
+    if (rigid && kind == 0 && !this->OutputDisplacement)
     {
-      in.RestNodes = repose_vtk::ToPoints(restPoints);
-      in.RestPoints = restPoints;
-      in.RestPointsTime = restPoints ? restPoints->GetMTime() : 0;
+      in.UpdateFixedBone(fixed);
     }
-    const repose::Points& restNodes = in.RestNodes;
     const repose::Points posedNodes = repose_vtk::ToPoints(posedMesh->GetPoints());
     const repose::ImageGrid outGrid = repose::posedOutputGrid(
       rest, posedNodes, GridOptions(rest, this->PaddingVoxels, this->ExtrapolationDistance, this->MaxVoxels));
@@ -325,127 +385,35 @@ int vtkReposePosedVolume::RequestData(
       voi = ClampedSubExtent(full, this->OutputSubExtent);
       options.outputExtent = voi;
     }
-    const repose::ImageGrid voiGrid = repose::extentGrid(outGrid, voi);
-    const vtkIdType voxels = static_cast<vtkIdType>(voiGrid.voxelCount());
-    // Rest scalars: converted again only when the array changes.
-    const int kind = this->Interpolation == Nearest ? 0 : 1;
-    if (!this->OutputDisplacement &&
-      (in.Scalars != scalars || in.ScalarsTime != scalars->GetMTime() || in.ScalarsKind != kind))
-    {
-      in.Scalars = nullptr;
-      in.LabelBoxes.reset();
-      in.Labels.data.clear();
-      in.Values.data.clear();
-      if (kind == 0)
-      {
-        CopyScalars(scalars, in.Labels.data);
-      }
-      else
-      {
-        CopyScalars(scalars, in.Values.data);
-      }
-      in.Scalars = scalars;
-      in.ScalarsTime = scalars->GetMTime();
-      in.ScalarsKind = kind;
-    }
-    in.Labels.grid = rest;
-    in.Values.grid = rest;
-    if (this->ExtrapolationDistance != 0)
-    {
-      // The boundary depends on the rest topology only: recompute it when the cells change.
-      if (!in.Boundary || in.Cells != cells || in.CellsTime != cellsTime ||
-        in.NumberOfCells != restMesh->GetNumberOfCells())
-      {
-        in.Boundary.reset(new repose::TetBoundary(repose::tetBoundary(tets)));
-        in.Cells = cells;
-        in.CellsTime = cellsTime;
-        in.NumberOfCells = restMesh->GetNumberOfCells();
-      }
-      options.boundary = in.Boundary.get();
-      // Rest coverage depends on the rest points and grid too (MTimes grow monotonically, so the
-      // newest of the inputs identifies them).
-      const vtkMTimeType coverageTime = std::max({ cellsTime, restMesh->GetPoints()->GetMTime(),
-        restMesh->GetMTime(), image->GetMTime() });
-      if (!in.Coverage || in.CoverageTime != coverageTime || !in.Coverage->grid.sameGridAs(rest))
-      {
-        in.Coverage.reset(new repose::MaskVolume(repose::restMeshCoverage(rest, restNodes, tets)));
-        in.Distance.reset(new repose::MaskVolume(repose::restMeshDistance(*in.Coverage)));
-        in.CoverageTime = coverageTime;
-      }
-      options.restCoverage = in.Coverage.get();
-      options.restDistance = in.Distance.get();
-    }
+    const vtkIdType voxels = static_cast<vtkIdType>(repose::extentGrid(outGrid, voi).voxelCount());
+
     repose::PullResampleReport report;
     vtkSmartPointer<vtkDataArray> outScalars;
+    this->RigidBoneVoxels = 0;
     this->ContestedBoneVoxels = 0;
     if (this->OutputDisplacement)
     {
       auto array = vtkSmartPointer<vtkFloatArray>::New();
       array->SetNumberOfComponents(3);
       array->SetNumberOfTuples(voxels);
-      repose::displacementPullInto(rest, restNodes, posedNodes, tets, outGrid, options, array->GetPointer(0), &report);
-      this->RigidBoneVoxels = 0;
+      in.Cache.displacementInto(posedNodes, outGrid, options, array->GetPointer(0), &report);
       outScalars = array;
     }
-    else if (this->Interpolation == Nearest)
+    else if (kind == 0)
     {
-      const repose::LabelVolume& labels = in.Labels;
-      // Written in place: the core fills every voxel. The previous pose's array is reused when nothing
-      // but this filter and its own output (about to be replaced) holds it: a fresh one costs page
-      // faults over the whole volume on every pose.
-      vtkSmartPointer<vtkIntArray> array = in.LastLabels;
-      in.LastLabels = nullptr;
-      const int holders = array ? 1 + (output->GetPointData()->GetScalars() == array.GetPointer() ? 1 : 0) : 0;
-      // Poses change the output grid a little: allocated with some room, reused while it holds the
-      // grid and is not much larger.
-      if (!array || array->GetReferenceCount() != holders || array->GetSize() < voxels ||
-        array->GetSize() > voxels + voxels / 4)
-      {
-        array = vtkSmartPointer<vtkIntArray>::New();
-        array->Allocate(voxels + voxels / 8);
-      }
-      array->SetNumberOfTuples(voxels);
-      in.LastLabels = array;
-      repose::resampleLabelsPullInto(labels, restNodes, posedNodes, tets, outGrid, options, array->GetPointer(0),
-        static_cast<std::int32_t>(this->BackgroundValue), &report);
-      this->RigidBoneVoxels = 0;
-      this->ContestedBoneVoxels = 0;
-      vtkDataArray* fixed = restMesh->GetPointData()->GetArray(repose::arrays::kFixedBone);
-      if (this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints())
-      {
-        // Pose-independent inputs of the overlay are converted once.
-        if (in.FixedArray != fixed || in.FixedTime != fixed->GetMTime() ||
-          in.FixedBone.size() != static_cast<std::size_t>(fixed->GetNumberOfTuples()))
-        {
-          in.FixedArray = nullptr;
-          in.FixedBone.resize(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
-          for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
-          {
-            in.FixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
-          }
-          in.FixedArray = fixed;
-          in.FixedTime = fixed->GetMTime();
-        }
-        const std::array<int, 3> dims = { { rest.dims[0], rest.dims[1], rest.dims[2] } };
-        if (!in.LabelBoxes || in.LabelBoxesDims != dims)
-        {
-          in.LabelBoxes.reset(new std::vector<Eigen::AlignedBox3i>(repose::restLabelBoxes(labels)));
-          in.LabelBoxesDims = dims;
-        }
-        const auto bones = repose::rigidBonesFromMesh(labels, restNodes, posedNodes, in.FixedBone);
-        std::size_t contested = 0;
-        this->RigidBoneVoxels = static_cast<vtkIdType>(repose::overlayRigidBones(
-          array->GetPointer(0), voiGrid, labels, bones, in.LabelBoxes.get(), &contested));
-        this->ContestedBoneVoxels = static_cast<vtkIdType>(contested);
-      }
+      vtkIntArray* array = in.LabelArray(output, voxels);
+      const repose::RigidBoneCounts counts = in.Cache.labelsInto(posedNodes, outGrid, options, array->GetPointer(0),
+        static_cast<std::int32_t>(this->BackgroundValue), rigid, &report);
+      this->RigidBoneVoxels = static_cast<vtkIdType>(counts.changedVoxels);
+      this->ContestedBoneVoxels = static_cast<vtkIdType>(counts.contestedVoxels);
       outScalars = array;
     }
     else
     {
       auto array = vtkSmartPointer<vtkFloatArray>::New();
       array->SetNumberOfTuples(voxels);
-      repose::resampleIntensityPullInto(in.Values, restNodes, posedNodes, tets, outGrid, options,
-        array->GetPointer(0), static_cast<float>(this->BackgroundValue), &report);
+      in.Cache.intensitiesInto(posedNodes, outGrid, options, array->GetPointer(0),
+        static_cast<float>(this->BackgroundValue), &report);
       outScalars = array;
     }
     outScalars->SetName(this->OutputDisplacement ? repose::arrays::kDisplacement
@@ -471,6 +439,27 @@ int vtkReposePosedVolume::RequestData(
     return 0;
   }
   return 1;
+}
+
+vtkIntArray* vtkReposePosedVolume::Internals::LabelArray(vtkImageData* output, vtkIdType voxels)
+{
+  // Written in place: the core fills every voxel. The previous pose's array is reused when nothing
+  // but this filter and its own output (about to be replaced) holds it: a fresh one costs page
+  // faults over the whole volume on every pose.
+  vtkSmartPointer<vtkIntArray> array = this->LastLabels;
+  this->LastLabels = nullptr;
+  const int holders = array ? 1 + (output->GetPointData()->GetScalars() == array.GetPointer() ? 1 : 0) : 0;
+  // Poses change the output grid a little: allocated with some room, reused while it holds the
+  // grid and is not much larger.
+  if (!array || array->GetReferenceCount() != holders || array->GetSize() < voxels ||
+    array->GetSize() > voxels + voxels / 4)
+  {
+    array = vtkSmartPointer<vtkIntArray>::New();
+    array->Allocate(voxels + voxels / 8);
+  }
+  array->SetNumberOfTuples(voxels);
+  this->LastLabels = array;
+  return array;
 }
 
 void vtkReposePosedVolume::PrintSelf(ostream& os, vtkIndent indent)

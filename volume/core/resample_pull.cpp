@@ -16,19 +16,20 @@
 #include <vector>
 
 #include "parallel_for.h"
-#include "point_tet_distance.h"
+#include "pull_extrapolation.h"
+#include "pull_pinholes.h"
+#include "pull_work_box.h"
 #include "tet_boundary.h"
 
 namespace repose {
 namespace {
 
+// The work box, the extrapolation and the pinhole fill (internal headers).
+using namespace pull;
+
 // Slack on barycentric coordinates so voxel centres on shared faces are covered by at least one tet
 // despite rounding (no cracks); the lowest-numbered tet covering a voxel gives its value.
 constexpr double kBaryEps = 1e-7;
-// Per-voxel coverage marks.
-constexpr std::uint8_t kEmpty = 0, kCovered = 1, kExtrapolated = 2;
-// Passes of the pinhole fill (each reads one 6-step further).
-constexpr int kFillPasses = 4;
 
 void validate(const ImageGrid& restGrid, std::size_t restSize, const Points& restNodes,
               const Points& posedNodes, const Tets& tets, const ImageGrid& outGrid,
@@ -91,8 +92,6 @@ struct TetSetup {
   bool mapReady = false;
 };
 
-using Vertices = double[4][3];
-
 // floor / ceil without a libm call (baseline x86-64 has no rounding instruction); arguments are
 // clamped far outside any grid first, so the conversion cannot overflow.
 inline double floorFast(double x) {
@@ -132,9 +131,9 @@ bool restInside(const Vertices& r, const int restDims[3]) {
 // p: posed vertices (output index space), r: rest vertices (rest index space); n: rows of the inverse of
 // the edge matrix [p1-p0 p2-p0 p3-p0] (columns) times det, i.e. cross products of the edges, and det
 // (non-zero), as the caller computed them for the orientation test.
-void setupTet(const Vertices& p, const Vertices& r, const double n[3][3], double det, TetSetup& s) {
+// The barycentric maps g, c of s (the rest map left to setupMap).
+inline void setupBarycentrics(const Vertices& p, const double n[3][3], double det, TetSetup& s) {
   const double inv = 1.0 / det;
-  for (int a = 0; a < 4; ++a) s.c[a] = 0;
   for (int q = 0; q < 3; ++q) {
     for (int m = 0; m < 3; ++m) s.g[q + 1][m] = n[q][m] * inv;
     s.c[q + 1] = -(s.g[q + 1][0] * p[0][0] + s.g[q + 1][1] * p[0][1] + s.g[q + 1][2] * p[0][2]);
@@ -143,8 +142,12 @@ void setupTet(const Vertices& p, const Vertices& r, const double n[3][3], double
   s.c[0] = 1.0 - (s.c[1] + s.c[2] + s.c[3]);
   for (int a = 0; a < 4; ++a) s.c[a] += kBaryEps;
   for (int m = 0; m < 3; ++m) s.p0[m] = p[0][m];
-  s.rest = r;
   s.mapReady = false;
+}
+
+void setupTet(const Vertices& p, const Vertices& r, const double n[3][3], double det, TetSetup& s) {
+  setupBarycentrics(p, n, det, s);
+  s.rest = r;
   for (int m = 0; m < 3; ++m) {
     s.lo[m] = std::min(std::min(p[0][m], p[1][m]), std::min(p[2][m], p[3][m]));
     s.hi[m] = std::max(std::max(p[0][m], p[1][m]), std::max(p[2][m], p[3][m]));
@@ -287,42 +290,12 @@ inline void scanTet(TetSetup& s, const int lo[3], const int hi[3], Emit&& emit) 
   }
 }
 
-// Output voxels worked on: an index box of the output grid (bounds inclusive), stored i fastest.
-struct Box {
-  int lo[3], hi[3], n[3];
-  Box(const int l[3], const int h[3]) {
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = l[a];
-      hi[a] = h[a];
-      n[a] = h[a] - l[a] + 1;
-    }
-  }
-  std::size_t count() const { return std::size_t(n[0]) * n[1] * n[2]; }
-  std::size_t rows() const { return std::size_t(n[1]) * n[2]; }
-  std::size_t index(int i, int j, int k) const {
-    return (std::size_t(k - lo[2]) * n[1] + std::size_t(j - lo[1])) * n[0] + std::size_t(i - lo[0]);
-  }
-  bool same(const Box& o) const {
-    for (int a = 0; a < 3; ++a)
-      if (lo[a] != o.lo[a] || hi[a] != o.hi[a]) return false;
-    return true;
-  }
-};
-
 // One voxel's value from one tet: `v` is the voxel's index in the work box minus the first index of its
 // z-range (32 bits halve the samples' memory traffic).
 template <class T>
 struct Sample {
   std::uint32_t v;
   T value;
-};
-
-// A voxel (index in the work box, or in its z-range within ChunkSamples) and a tet it is covered by or
-// extrapolated from.
-template <class Index>
-struct VoxelTet {
-  Index v;
-  std::uint32_t t;
 };
 
 // Samples of a fixed chunk of consecutive tets (in tet order), split by z-range of the work box so the
@@ -334,13 +307,6 @@ struct ChunkSamples {
   std::vector<std::vector<VoxelTet<std::uint32_t>>> front;
   std::size_t inverted = 0;
 };
-
-inline void loadVertices(const std::vector<float>& X, const Tets& tets, std::size_t t, Vertices& p) {
-  for (int a = 0; a < 4; ++a) {
-    const std::size_t v = std::size_t(tets(t, a)) * 3;
-    for (int m = 0; m < 3; ++m) p[a][m] = X[v + m];
-  }
-}
 
 // Voxel centres of the box within the bounding box of posed tet t (same rounding as scanTet): [lo, hi]
 // per axis; false if there are none. Read straight from the float node coordinates X (the float
@@ -536,31 +502,6 @@ struct CoverageKernel {
   bool extendAt(const double*, double, RestDistance&&, std::uint8_t&) const { return false; }
 };
 
-// First and last non-empty mark of a row ([n, -1] if none), by 8-byte words.
-inline void rowSpan(const std::uint8_t* m, int n, int& first, int& last) {
-  first = n;
-  last = -1;
-  int i = 0;
-  for (; i + 8 <= n; i += 8) {
-    std::uint64_t w;
-    std::memcpy(&w, m + i, 8);
-    if (w) break;
-  }
-  for (; i < n; ++i)
-    if (m[i]) break;
-  if (i >= n) return;
-  first = i;
-  int e = n;
-  for (; e - 8 >= first; e -= 8) {
-    std::uint64_t w;
-    std::memcpy(&w, m + e - 8, 8);
-    if (w) break;
-  }
-  for (; e > first; --e)
-    if (m[e - 1]) break;
-  last = e - 1;
-}
-
 std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
   std::int32_t best = background;
   int bestCount = 0;
@@ -573,492 +514,268 @@ std::int32_t mostCommon(const std::int32_t* v, int n, std::int32_t background) {
   return best;
 }
 
-// Edges e_q = p_{q+1} - p_0 of a tet and n_q = e_{q+1} x e_{q+2} (the rows of the inverse of the edge
-// matrix times its determinant); returns the determinant e_0 . n_0.
-inline double edgeCofactors(const Vertices& p, double e[3][3], double n[3][3]) {
-  for (int q = 0; q < 3; ++q)
-    for (int m = 0; m < 3; ++m) e[q][m] = p[q + 1][m] - p[0][m];
-  for (int q = 0; q < 3; ++q) {
-    const double* u = e[(q + 1) % 3];
-    const double* w = e[(q + 2) % 3];
-    n[q][0] = u[1] * w[2] - u[2] * w[1];
-    n[q][1] = u[2] * w[0] - u[0] * w[2];
-    n[q][2] = u[0] * w[1] - u[1] * w[0];
-  }
-  return e[0][0] * n[0][0] + e[0][1] * n[0][1] + e[0][2] * n[0][2];
-}
-
-// The posed tet t's barycentric coordinates at x (output index space) give `distance`, how far (mm) x
-// lies outside the tet (the largest of -λ_a times the tet's height over face a; 0 inside), and r, the
-// rest index of x under the tet's affine map. False for a flat or inverted tet.
-bool tetExtension(const std::vector<float>& P, const std::vector<float>& R, const Tets& tets, std::size_t t,
-                  const double x[3], const Eigen::Vector3d& invSpacing, double orient, double& distance,
-                  double r[3]) {
-  Vertices p;
-  loadVertices(P, tets, t, p);
-  double e[3][3], n[3][3];
-  const double det = edgeCofactors(p, e, n);
-  if (!(orient * det > 0)) return false;
-  const double d[3] = {x[0] - p[0][0], x[1] - p[0][1], x[2] - p[0][2]};
-  double lambda[4], g[4][3];
-  lambda[0] = 1.0;
-  for (int m = 0; m < 3; ++m) g[0][m] = 0;
-  for (int q = 0; q < 3; ++q) {
-    lambda[q + 1] = (n[q][0] * d[0] + n[q][1] * d[1] + n[q][2] * d[2]) / det;
-    lambda[0] -= lambda[q + 1];
-    for (int m = 0; m < 3; ++m) {
-      g[q + 1][m] = n[q][m] / det;
-      g[0][m] -= g[q + 1][m];
-    }
-  }
-  distance = 0;
-  for (int a = 0; a < 4; ++a)
-    if (lambda[a] < 0) {
-      // |physical gradient of λ_a| = 1 / height (the direction matrix is orthonormal).
-      const double gx = g[a][0] * invSpacing[0], gy = g[a][1] * invSpacing[1], gz = g[a][2] * invSpacing[2];
-      distance = std::max(distance, -lambda[a] / std::sqrt(gx * gx + gy * gy + gz * gz));
-    }
-  for (int m = 0; m < 3; ++m) r[m] = 0;
-  for (int a = 0; a < 4; ++a) {
-    const std::size_t v = std::size_t(tets(t, a)) * 3;
-    for (int m = 0; m < 3; ++m) r[m] += lambda[a] * double(R[v + m]);
-  }
-  return true;
-}
 
 // The whole resampling of the output voxels in `voi` (output index box) into `dst` (voi's voxels, i
-// fastest). Work is O(#tets + written voxels) plus filling dst:
-//  1. one pass over fixed chunks of tets (each set up once): samples of every voxel centre in a tet,
-//     kept per chunk and z-range, and the voxels of tets touching the mesh boundary;
-//  2. per z-range, the samples written from the last tet to the first (the lowest-numbered tet
-//     covering a voxel wins);
-//  3. with extrapolation, the mesh's outside grown layer by layer on the voxel grid (below), then
-//     pinholes filled, visiting only the rows that hold written voxels.
+// fastest), one stage per method. Work is O(#tets + written voxels) plus filling dst:
+//  1. sampleTets: one pass over fixed chunks of tets (each set up once): samples of every voxel centre
+//     in a tet, kept per chunk and z-range, and the voxels of tets touching the mesh boundary;
+//  2. writeSamples: per z-range, the samples written from the last tet to the first (the
+//     lowest-numbered tet covering a voxel wins);
+//  3. with extrapolation, the mesh's outside grown layer by layer on the voxel grid from the seeds of
+//     step 1 (pull_extrapolation.h), then pinholes filled, visiting only the rows that hold written
+//     voxels (pull_pinholes.h);
+//  4. finish: counts over voi, and voi's voxels into dst when the work box is larger.
 // With extrapolation the work box is `voi` grown by the reach of step 3, so a sub-extent gets exactly
 // the values of the full resample.
+template <class Kernel>
+class PullResampler {
+ public:
+  using T = typename Kernel::Value;
+
+  PullResampler(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes, const Tets& tets,
+                const ImageGrid& outGrid, const PullResampleOptions& options, const Kernel& kernel, T background,
+                const Box& voi, T* dst)
+      : tets_(tets), kernel_(kernel), background_(background),
+        distance_(options.extrapolationDistance < 0 ? 2.0 * restGrid.spacing.maxCoeff()
+                                                    : options.extrapolationDistance),
+        extrapolate_(options.boundary && distance_ > 0),
+        // Layers of extrapolation: enough 6-steps to reach `distance` along an axis of the finest
+        // spacing, and two more for the diagonal steps around convex corners and for meshes coarser than
+        // the voxels (their boundary faces cut corners of the peeled mask).
+        layers_(extrapolate_ ? int(std::min(64.0, std::ceil(distance_ / outGrid.spacing.minCoeff()))) + 2 : 0),
+        touches_(extrapolate_ ? options.boundary->touchesBoundary.data() : nullptr),
+        // Step 3 reads marks up to layers + kFillPasses + 1 voxels away.
+        w_(voi, outGrid.dims.data(), extrapolate_ ? layers_ + kFillPasses + 1 : 0, dst, background),
+        mesh_{P_, R_, tets, outGrid.direction.determinant() < 0 ? -1.0 : 1.0, outGrid.spacing.cwiseInverse(),
+              restGrid.spacing} {
+    // Node positions in output / rest index space. Orientation in index space flips with a
+    // left-handed direction matrix (mesh_.orient).
+    const std::size_t nV = std::size_t(posedNodes.rows());
+    P_.resize(3 * nV);
+    R_.resize(3 * nV);
+    parallelFor(nV, [&](std::size_t b, std::size_t e) {
+      for (std::size_t v = b; v < e; ++v) {
+        const Eigen::Vector3d p = outGrid.physicalToIndex(posedNodes.row(v).transpose());
+        const Eigen::Vector3d r = restGrid.physicalToIndex(restNodes.row(v).transpose());
+        for (int m = 0; m < 3; ++m) {
+          P_[3 * v + m] = float(p[m]);
+          R_[3 * v + m] = float(r[m]);
+        }
+      }
+    });
+    for (int a = 0; a < 3; ++a) restDims_[a] = restGrid.dims[a];
+    w_.splitRanges();
+  }
+
+  template <class Combine>
+  void run(Combine& combine, PullResampleReport* report, std::chrono::steady_clock::time_point start) {
+    sampleTets();
+    writeSamples();
+    std::size_t inverted = 0;
+    for (auto& C : chunks_) inverted += C.inverted;
+    if (extrapolate_) {
+      std::vector<Seed> seeds = frontSeeds();
+      std::vector<ChunkSamples<T>>().swap(chunks_);
+      extrapolateLayers(w_, std::move(seeds), layers_, kernel_, mesh_);
+    }
+    std::vector<ChunkSamples<T>>().swap(chunks_);
+    const RowSpans spans(w_);
+    const std::size_t filledInVoi = extrapolate_ ? fillPinholes(w_, spans, background_, combine) : 0;
+    std::size_t covered, extended;
+    finish(spans, covered, extended);
+    if (report) {
+      report->outputVoxels = w_.voi.count();
+      report->coveredVoxels = covered;
+      report->extrapolatedVoxels = extended + filledInVoi;
+      report->invertedTets = inverted;
+      report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+  }
+
+ private:
+  // 1. Samples per chunk of tets and z-range.
+  void sampleTets() {
+    const std::size_t nT = std::size_t(tets_.rows());
+    nChunks_ = std::min<std::size_t>(512, std::max<std::size_t>(1, nT / 4096));
+    chunks_.resize(nChunks_);
+    parallelFor(nChunks_, [&](std::size_t cb, std::size_t ce) {
+      for (std::size_t c = cb; c < ce; ++c) sampleChunk(c, c * nT / nChunks_, (c + 1) * nT / nChunks_);
+    }, 1);
+  }
+
+  // The samples of tets [tb, te) into chunk c.
+  void sampleChunk(std::size_t c, std::size_t tb, std::size_t te) {
+    const Box& W = w_.W;
+    const std::vector<float>& P = P_;
+    const Tets& tets = tets_;
+    Vertices p, r;
+    TetSetup st{}, sm{};
+    ChunkSamples<T>& C = chunks_[c];
+    C.cover.resize(std::size_t(w_.nRanges));
+    C.front.resize(std::size_t(w_.nRanges));
+    for (std::size_t t = tb; t < te; ++t) {
+      // Tets finer than the voxels often hold no voxel centre at all.
+      int lb[3], ub[3];
+      if (!latticeBox(P, tets, t, W, lb, ub)) continue;
+      const bool front = touches_ && touches_[t];
+      loadVertices(P, tets, t, p);
+      // Edges, and the rows of their inverse times det (for setupTet).
+      double e[3][3], n[3][3];
+      const double det = edgeCofactors(p, e, n);
+      // Inverted or flat: orient * det <= 1e-12 x the product of the edge lengths.
+      const double od = mesh_.orient * det;
+      const double l2 = (e[0][0] * e[0][0] + e[0][1] * e[0][1] + e[0][2] * e[0][2]) *
+                        (e[1][0] * e[1][0] + e[1][1] * e[1][1] + e[1][2] * e[1][2]) *
+                        (e[2][0] * e[2][0] + e[2][1] * e[2][1] + e[2][2] * e[2][2]);
+      if (!(od > 0 && od * od > 1e-24 * l2)) {
+        ++C.inverted;
+        continue;
+      }
+      const int candidates = (ub[0] - lb[0] + 1) * (ub[1] - lb[1] + 1) * (ub[2] - lb[2] + 1);
+      if (candidates <= 8) {
+        // Few candidate centres: test them directly; the rest map only once one is inside.
+        setupBarycentrics(p, n, det, sm);
+        sm.restInside = false;
+        for (int k = lb[2]; k <= ub[2]; ++k)
+          for (int j = lb[1]; j <= ub[1]; ++j)
+            for (int i = lb[0]; i <= ub[0]; ++i) {
+              bool in = true;
+              for (int a = 0; a < 4; ++a)
+                in = in & (sm.g[a][0] * i + sm.g[a][1] * j + sm.g[a][2] * k + sm.c[a] >= 0);
+              if (!in) continue;
+              if (!sm.mapReady) {
+                loadVertices(R_, tets, t, r);
+                sm.rest = r;
+                setupMap(sm);
+              }
+              double rk[3];
+              for (int m = 0; m < 3; ++m) rk[m] = sm.A[m][2] * k + sm.b[m];
+              const std::size_t g = w_.rangeOf[std::size_t(k - W.lo[2])];
+              const std::size_t base = W.index(i, j, k) - w_.rangeBase[g];
+              kernel_.cover(sm, i, i, j, rk, [&](int off, T value) {
+                C.cover[g].push_back({std::uint32_t(base + std::size_t(off)), value});
+              });
+              if (front) C.front[g].push_back({std::uint32_t(base), std::uint32_t(t)});
+            }
+        continue;
+      }
+      loadVertices(R_, tets, t, r);
+      setupTet(p, r, n, det, st);
+      st.restInside = restInside(r, restDims_);
+      scanTet(st, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
+        const std::size_t g = w_.rangeOf[std::size_t(k - W.lo[2])];
+        auto& out1 = C.cover[g];
+        const std::size_t base = W.index(i0, j, k) - w_.rangeBase[g];
+        kernel_.cover(st, i0, i1, j, rk, [&](int off, T value) {
+          out1.push_back({std::uint32_t(base + std::size_t(off)), value});
+        });
+        if (front)
+          for (int i = i0; i <= i1; ++i)
+            C.front[g].push_back({std::uint32_t(base + std::size_t(i - i0)), std::uint32_t(t)});
+      });
+    }
+  }
+
+  // 2. Writes, one z-range per task.
+  void writeSamples() {
+    parallelFor(std::size_t(w_.nRanges), [&](std::size_t rb, std::size_t re) {
+      for (std::size_t g = rb; g < re; ++g) {
+        T* rangeOut = w_.out + w_.rangeBase[g];
+        std::uint8_t* rangeMarks = w_.marks.get() + w_.rangeBase[g];
+        for (std::size_t c = nChunks_; c-- > 0;) {
+          const auto& S = chunks_[c].cover[g];
+          for (std::size_t q1 = S.size(); q1-- > 0;) {
+            rangeOut[S[q1].v] = S[q1].value;
+            rangeMarks[S[q1].v] = kCovered;
+          }
+        }
+      }
+    }, 1);
+  }
+
+  // The extrapolation's first layer: the front voxels (covered by tets touching the mesh boundary) next
+  // to an empty voxel, each with the lowest-numbered such tet, sorted by voxel.
+  std::vector<Seed> frontSeeds() const {
+    const int nx = w_.nx, ny = w_.ny, nz = w_.nz;
+    const std::size_t sliceSize = w_.sliceSize;
+    const std::uint8_t* marks = w_.marks.get();
+    auto hasEmptyNeighbour = [&](std::size_t v) {
+      int i, j, k;
+      w_.ijk(v, i, j, k);
+      return (k > 0 && marks[v - sliceSize] == kEmpty) || (j > 0 && marks[v - std::size_t(nx)] == kEmpty) ||
+             (i > 0 && marks[v - 1] == kEmpty) || (i + 1 < nx && marks[v + 1] == kEmpty) ||
+             (j + 1 < ny && marks[v + std::size_t(nx)] == kEmpty) || (k + 1 < nz && marks[v + sliceSize] == kEmpty);
+    };
+    std::vector<std::vector<Seed>> seeds(static_cast<std::size_t>(w_.nRanges));
+    parallelFor(std::size_t(w_.nRanges), [&](std::size_t rb, std::size_t re) {
+      for (std::size_t g = rb; g < re; ++g) {
+        auto& S = seeds[g];
+        const std::size_t base = w_.rangeBase[g];
+        for (const auto& C : chunks_)
+          for (const auto& f : C.front[g])
+            if (hasEmptyNeighbour(base + f.v)) S.push_back({base + f.v, f.t});
+        std::sort(S.begin(), S.end(), [](const Seed& x, const Seed& y) { return x.v != y.v ? x.v < y.v : x.t < y.t; });
+        S.erase(std::unique(S.begin(), S.end(), [](const Seed& x, const Seed& y) { return x.v == y.v; }), S.end());
+      }
+    }, 1);
+    std::vector<Seed> layer;
+    for (auto& S : seeds) layer.insert(layer.end(), S.begin(), S.end());
+    return layer;
+  }
+
+  // 4. Counts over the requested voxels; then those voxels into dst when the work box is larger.
+  void finish(const RowSpans& spans, std::size_t& coveredCount, std::size_t& extendedCount) {
+    const Box& W = w_.W;
+    const Box& voi = w_.voi;
+    const int nx = w_.nx, ny = w_.ny;
+    const T* out = w_.out;
+    T* dst = w_.direct ? nullptr : w_.dst;
+    std::atomic<std::size_t> covered{0}, extended{0};
+    parallelFor(std::size_t(voi.n[2]), [&](std::size_t kb, std::size_t ke) {
+      std::size_t c = 0, x = 0;
+      for (int k = voi.lo[2] + int(kb); k < voi.lo[2] + int(ke); ++k)
+        for (int j = voi.lo[1]; j <= voi.hi[1]; ++j) {
+          const std::size_t row = std::size_t(k - W.lo[2]) * ny + std::size_t(j - W.lo[1]);
+          const std::size_t base = W.index(voi.lo[0], j, k);
+          if (dst) std::copy(out + base, out + base + voi.n[0], dst + voi.index(voi.lo[0], j, k));
+          const int ib = std::max(spans.first[row], voi.lo[0] - W.lo[0]);
+          const int ie = std::min(spans.last[row], voi.hi[0] - W.lo[0]);
+          for (int i = ib; i <= ie; ++i) {
+            const std::uint8_t m = w_.marks[row * nx + std::size_t(i)];
+            c += m == kCovered;
+            x += m == kExtrapolated;
+          }
+        }
+      covered += c;
+      extended += x;
+    }, 1);
+    coveredCount = covered.load();
+    extendedCount = extended.load();
+  }
+
+  const Tets& tets_;
+  const Kernel& kernel_;
+  const T background_;
+  const double distance_;
+  const bool extrapolate_;
+  const int layers_;
+  const std::uint8_t* touches_;  // per tet: touches the mesh boundary (null without extrapolation)
+  WorkBox<T> w_;
+  std::vector<float> P_, R_;  // node positions in output / rest index space
+  IndexSpaceMesh mesh_;
+  int restDims_[3];
+  std::size_t nChunks_ = 0;
+  std::vector<ChunkSamples<T>> chunks_;
+};
+
 template <class Kernel, class Combine>
 void resampleInto(const ImageGrid& restGrid, const Points& restNodes, const Points& posedNodes, const Tets& tets,
                   const ImageGrid& outGrid, const PullResampleOptions& options, const Kernel& kernel,
                   typename Kernel::Value background, Combine combine, const Box& voi,
                   typename Kernel::Value* dst, PullResampleReport* report,
                   std::chrono::steady_clock::time_point start) {
-  using T = typename Kernel::Value;
-  const double distance = options.extrapolationDistance < 0 ? 2.0 * restGrid.spacing.maxCoeff()
-                                                             : options.extrapolationDistance;
-  const bool extrapolate = options.boundary && distance > 0;
-  // Layers of extrapolation: enough 6-steps to reach `distance` along an axis of the finest spacing, and
-  // two more for the diagonal steps around convex corners and for meshes coarser than the voxels
-  // (their boundary faces cut corners of the peeled mask).
-  const int layers = extrapolate ? int(std::min(64.0, std::ceil(distance / outGrid.spacing.minCoeff()))) + 2 : 0;
-  // Step 3 reads marks up to layers + kFillPasses + 1 voxels away.
-  const int pad = extrapolate ? layers + kFillPasses + 1 : 0;
-  const std::uint8_t* touches = extrapolate ? options.boundary->touchesBoundary.data() : nullptr;
-  int wlo[3], whi[3];
-  for (int a = 0; a < 3; ++a) {
-    wlo[a] = std::max(0, voi.lo[a] - pad);
-    whi[a] = std::min(outGrid.dims[a] - 1, voi.hi[a] + pad);
-  }
-  const Box W(wlo, whi);
-  const int nx = W.n[0], ny = W.n[1], nz = W.n[2];
-  const std::size_t sliceSize = std::size_t(nx) * ny, nW = W.count();
-  const bool direct = W.same(voi);
-  std::vector<T> workBuffer(direct ? 0 : nW);
-  T* out = direct ? dst : workBuffer.data();
-  // Background everywhere (first touch in parallel: output buffers are hundreds of MB).
-  std::unique_ptr<std::uint8_t[]> marks(new std::uint8_t[nW]);
-  parallelFor(nW, [&](std::size_t b, std::size_t e) {
-    std::fill(out + b, out + e, background);
-    std::memset(marks.get() + b, kEmpty, e - b);
-  }, 1 << 18);
-
-  // Node positions in output / rest index space.
-  const std::size_t nV = std::size_t(posedNodes.rows()), nT = std::size_t(tets.rows());
-  std::vector<float> P(3 * nV), R(3 * nV);
-  parallelFor(nV, [&](std::size_t b, std::size_t e) {
-    for (std::size_t v = b; v < e; ++v) {
-      const Eigen::Vector3d p = outGrid.physicalToIndex(posedNodes.row(v).transpose());
-      const Eigen::Vector3d r = restGrid.physicalToIndex(restNodes.row(v).transpose());
-      for (int m = 0; m < 3; ++m) {
-        P[3 * v + m] = float(p[m]);
-        R[3 * v + m] = float(r[m]);
-      }
-    }
-  });
-  int restDims[3];
-  for (int a = 0; a < 3; ++a) restDims[a] = restGrid.dims[a];
-  // Orientation in index space flips with a left-handed direction matrix.
-  const double orient = outGrid.direction.determinant() < 0 ? -1.0 : 1.0;
-  const Eigen::Vector3d invSpacing = outGrid.spacing.cwiseInverse();
-  const Eigen::Vector3d restSpacing = restGrid.spacing;
-
-  // 1. Samples per chunk of tets and z-range.
-  const int nRanges = std::min(nz, 16);
-  std::vector<std::uint8_t> rangeOf(static_cast<std::size_t>(nz));
-  for (int k = 0; k < nz; ++k) rangeOf[std::size_t(k)] = std::uint8_t(std::size_t(k) * nRanges / nz);
-  // First work-box index of each z-range (every range holds at least one slice).
-  std::vector<std::size_t> rangeBase(std::size_t(nRanges) + 1, nW);
-  for (int k = nz; k-- > 0;) rangeBase[rangeOf[std::size_t(k)]] = std::size_t(k) * sliceSize;
-  for (int g = 0; g < nRanges; ++g)
-    if (rangeBase[std::size_t(g) + 1] - rangeBase[std::size_t(g)] > 0xffffffffu)
-      throw std::length_error("pull resample: output grid too large (a sixteenth of it exceeds 2^32 voxels)");
-  const std::size_t nChunks = std::min<std::size_t>(512, std::max<std::size_t>(1, nT / 4096));
-  std::vector<ChunkSamples<T>> chunks(nChunks);
-  parallelFor(nChunks, [&](std::size_t cb, std::size_t ce) {
-    Vertices p, r;
-    TetSetup st{}, sm{};
-    for (std::size_t c = cb; c < ce; ++c) {
-      ChunkSamples<T>& C = chunks[c];
-      C.cover.resize(std::size_t(nRanges));
-      C.front.resize(std::size_t(nRanges));
-      for (std::size_t t = c * nT / nChunks, te = (c + 1) * nT / nChunks; t < te; ++t) {
-        // Tets finer than the voxels often hold no voxel centre at all.
-        int lb[3], ub[3];
-        if (!latticeBox(P, tets, t, W, lb, ub)) continue;
-        const bool front = touches && touches[t];
-        loadVertices(P, tets, t, p);
-        // Edges, and the rows of their inverse times det (for setupTet).
-        double e[3][3], n[3][3];
-        const double det = edgeCofactors(p, e, n);
-        // Inverted or flat: orient * det <= 1e-12 x the product of the edge lengths.
-        const double od = orient * det;
-        const double l2 = (e[0][0] * e[0][0] + e[0][1] * e[0][1] + e[0][2] * e[0][2]) *
-                          (e[1][0] * e[1][0] + e[1][1] * e[1][1] + e[1][2] * e[1][2]) *
-                          (e[2][0] * e[2][0] + e[2][1] * e[2][1] + e[2][2] * e[2][2]);
-        if (!(od > 0 && od * od > 1e-24 * l2)) {
-          ++C.inverted;
-          continue;
-        }
-        const int candidates = (ub[0] - lb[0] + 1) * (ub[1] - lb[1] + 1) * (ub[2] - lb[2] + 1);
-        if (candidates <= 8) {
-          // Few candidate centres: test them directly; the rest map only once one is inside.
-          const double inv = 1.0 / det;
-          for (int q1 = 0; q1 < 3; ++q1) {
-            for (int m = 0; m < 3; ++m) sm.g[q1 + 1][m] = n[q1][m] * inv;
-            sm.c[q1 + 1] = -(sm.g[q1 + 1][0] * p[0][0] + sm.g[q1 + 1][1] * p[0][1] + sm.g[q1 + 1][2] * p[0][2]);
-          }
-          for (int m = 0; m < 3; ++m) sm.g[0][m] = -(sm.g[1][m] + sm.g[2][m] + sm.g[3][m]);
-          sm.c[0] = 1.0 - (sm.c[1] + sm.c[2] + sm.c[3]);
-          for (int a = 0; a < 4; ++a) sm.c[a] += kBaryEps;
-          for (int m = 0; m < 3; ++m) sm.p0[m] = p[0][m];
-          sm.mapReady = false;
-          sm.restInside = false;
-          for (int k = lb[2]; k <= ub[2]; ++k)
-            for (int j = lb[1]; j <= ub[1]; ++j)
-              for (int i = lb[0]; i <= ub[0]; ++i) {
-                bool in = true;
-                for (int a = 0; a < 4; ++a)
-                  in = in & (sm.g[a][0] * i + sm.g[a][1] * j + sm.g[a][2] * k + sm.c[a] >= 0);
-                if (!in) continue;
-                if (!sm.mapReady) {
-                  loadVertices(R, tets, t, r);
-                  sm.rest = r;
-                  setupMap(sm);
-                }
-                double rk[3];
-                for (int m = 0; m < 3; ++m) rk[m] = sm.A[m][2] * k + sm.b[m];
-                const std::size_t g = rangeOf[std::size_t(k - W.lo[2])];
-                const std::size_t base = W.index(i, j, k) - rangeBase[g];
-                kernel.cover(sm, i, i, j, rk, [&](int off, T value) {
-                  C.cover[g].push_back({std::uint32_t(base + std::size_t(off)), value});
-                });
-                if (front) C.front[g].push_back({std::uint32_t(base), std::uint32_t(t)});
-              }
-          continue;
-        }
-        loadVertices(R, tets, t, r);
-        setupTet(p, r, n, det, st);
-        st.restInside = restInside(r, restDims);
-        scanTet(st, W.lo, W.hi, [&](int i0, int i1, int j, int k, const double* rk) {
-          const std::size_t g = rangeOf[std::size_t(k - W.lo[2])];
-          auto& out1 = C.cover[g];
-          const std::size_t base = W.index(i0, j, k) - rangeBase[g];
-          kernel.cover(st, i0, i1, j, rk, [&](int off, T value) {
-            out1.push_back({std::uint32_t(base + std::size_t(off)), value});
-          });
-          if (front)
-            for (int i = i0; i <= i1; ++i)
-              C.front[g].push_back({std::uint32_t(base + std::size_t(i - i0)), std::uint32_t(t)});
-        });
-      }
-    }
-  }, 1);
-
-  // 2. Writes, one z-range per task.
-  parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
-    for (std::size_t g = rb; g < re; ++g) {
-      T* rangeOut = out + rangeBase[g];
-      std::uint8_t* rangeMarks = marks.get() + rangeBase[g];
-      for (std::size_t c = nChunks; c-- > 0;) {
-        const auto& S = chunks[c].cover[g];
-        for (std::size_t q1 = S.size(); q1-- > 0;) {
-          rangeOut[S[q1].v] = S[q1].value;
-          rangeMarks[S[q1].v] = kCovered;
-        }
-      }
-    }
-  }, 1);
-  std::size_t inverted = 0;
-  for (auto& C : chunks) inverted += C.inverted;
-
-  if (extrapolate) {
-    // 3a. Extrapolation. The mesh stops short of the body's outer voxel layer (the mask is peeled
-    // before meshing), so the outside of the posed mesh is grown on the voxel grid, layer by layer of
-    // 6-neighbours: a voxel of the next layer is extrapolated from the tets of its neighbours in the
-    // current one (starting from the covered voxels next to empty ones, with the lowest-numbered tet
-    // touching the mesh boundary that covers them); of those, the tet it lies least far outside of
-    // and whose sample the kernel accepts (labels never write background) wins. Each extrapolated
-    // voxel is thus connected to the posed body, and the work is proportional to the voxels written.
-    using Seed = VoxelTet<std::size_t>;
-    auto emptyNeighbours = [&](std::size_t v, std::size_t* w) {
-      const std::size_t row = v / std::size_t(nx);
-      const int i = int(v - row * std::size_t(nx));
-      const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
-      int n = 0;
-      // Ascending offsets, so that the neighbours of a sorted list come out as six sorted lists.
-      if (k > 0 && marks[v - sliceSize] == kEmpty) w[n++] = v - sliceSize;
-      if (j > 0 && marks[v - std::size_t(nx)] == kEmpty) w[n++] = v - std::size_t(nx);
-      if (i > 0 && marks[v - 1] == kEmpty) w[n++] = v - 1;
-      if (i + 1 < nx && marks[v + 1] == kEmpty) w[n++] = v + 1;
-      if (j + 1 < ny && marks[v + std::size_t(nx)] == kEmpty) w[n++] = v + std::size_t(nx);
-      if (k + 1 < nz && marks[v + sliceSize] == kEmpty) w[n++] = v + sliceSize;
-      return n;
-    };
-    std::vector<std::vector<Seed>> seeds(static_cast<std::size_t>(nRanges));
-    parallelFor(std::size_t(nRanges), [&](std::size_t rb, std::size_t re) {
-      std::size_t w[6];
-      for (std::size_t g = rb; g < re; ++g) {
-        auto& S = seeds[g];
-        for (const auto& C : chunks)
-          for (const auto& f : C.front[g])
-            if (emptyNeighbours(rangeBase[g] + f.v, w) > 0) S.push_back({rangeBase[g] + f.v, f.t});
-        std::sort(S.begin(), S.end(), [](const Seed& x, const Seed& y) { return x.v != y.v ? x.v < y.v : x.t < y.t; });
-        S.erase(std::unique(S.begin(), S.end(), [](const Seed& x, const Seed& y) { return x.v == y.v; }), S.end());
-      }
-    }, 1);
-    std::vector<ChunkSamples<T>>().swap(chunks);
-    std::vector<Seed> layer;
-    for (auto& S : seeds) layer.insert(layer.end(), S.begin(), S.end());
-    std::vector<std::vector<Seed>>().swap(seeds);
-
-    std::vector<Seed> candidates, merged, streams[6];
-    std::vector<std::size_t> groups;
-    std::vector<std::uint32_t> bestTet;
-    std::vector<T> bestValue;
-    for (int step = 0; step < layers && !layer.empty(); ++step) {
-      // Candidates (voxel, tet) sorted by voxel then tet: six sorted lists, one per neighbour offset,
-      // merged.
-      for (auto& S : streams) S.clear();
-      for (const Seed& s : layer) {
-        const std::size_t row = s.v / std::size_t(nx);
-        const int i = int(s.v - row * std::size_t(nx));
-        const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
-        const bool ok[6] = {k > 0, j > 0, i > 0, i + 1 < nx, j + 1 < ny, k + 1 < nz};
-        const std::ptrdiff_t off[6] = {-std::ptrdiff_t(sliceSize), -std::ptrdiff_t(nx), -1, 1, std::ptrdiff_t(nx),
-                                       std::ptrdiff_t(sliceSize)};
-        for (int q = 0; q < 6; ++q)
-          if (ok[q]) {
-            const std::size_t n = std::size_t(std::ptrdiff_t(s.v) + off[q]);
-            if (marks[n] == kEmpty) streams[q].push_back({n, s.t});
-          }
-      }
-      auto less = [](const Seed& x, const Seed& y) { return x.v != y.v ? x.v < y.v : x.t < y.t; };
-      candidates = streams[0];
-      for (int q = 1; q < 6; ++q) {
-        merged.resize(candidates.size() + streams[q].size());
-        std::merge(candidates.begin(), candidates.end(), streams[q].begin(), streams[q].end(), merged.begin(), less);
-        candidates.swap(merged);
-      }
-      groups.clear();
-      for (std::size_t q = 0; q < candidates.size(); ++q)
-        if (q == 0 || candidates[q].v != candidates[q - 1].v) groups.push_back(q);
-      const std::size_t nGroups = groups.size();
-      groups.push_back(candidates.size());
-      bestTet.assign(nGroups, std::numeric_limits<std::uint32_t>::max());
-      bestValue.resize(nGroups);
-      parallelFor(nGroups, [&](std::size_t gb, std::size_t ge) {
-        for (std::size_t q = gb; q < ge; ++q) {
-          const std::size_t v = candidates[groups[q]].v;
-          const std::size_t row = v / std::size_t(nx);
-          const double x[3] = {double(W.lo[0] + int(v - row * std::size_t(nx))),
-                               double(W.lo[1] + int(row % std::size_t(ny))), double(W.lo[2] + int(row / std::size_t(ny)))};
-          double best = std::numeric_limits<double>::infinity();  // the layers bound the reach
-          for (std::size_t c = groups[q]; c < groups[q + 1]; ++c) {
-            const std::uint32_t t = candidates[c].t;
-            if (c > groups[q] && t == candidates[c - 1].t) continue;
-            double dist, r[3];
-            T value;
-            if (!tetExtension(P, R, tets, t, x, invSpacing, orient, dist, r) || !(dist <= best)) continue;
-            if (dist == best && bestTet[q] != std::numeric_limits<std::uint32_t>::max()) continue;
-            auto restDistanceToTet = [&] {
-              Eigen::Vector3d v[4];
-              for (int a = 0; a < 4; ++a)
-                for (int m = 0; m < 3; ++m) v[a][m] = double(R[std::size_t(tets(t, a)) * 3 + m]) * restSpacing[m];
-              return pointTetDistance(Eigen::Vector3d(r[0], r[1], r[2]).cwiseProduct(restSpacing), v[0], v[1], v[2], v[3]);
-            };
-            if (!kernel.extendAt(r, dist, restDistanceToTet, value)) continue;
-            best = dist;
-            bestTet[q] = t;
-            bestValue[q] = value;
-          }
-        }
-      }, 256);
-      layer.clear();
-      for (std::size_t q = 0; q < nGroups; ++q)
-        if (bestTet[q] != std::numeric_limits<std::uint32_t>::max()) {
-          const std::size_t v = candidates[groups[q]].v;
-          out[v] = bestValue[q];
-          marks[v] = kExtrapolated;
-          layer.push_back({v, bestTet[q]});
-        }
-    }
-  }
-  std::vector<ChunkSamples<T>>().swap(chunks);
-
-  // Rows holding written voxels: [first, last] of each (first > last if none).
-  std::vector<int> first(W.rows()), last(W.rows());
-  parallelFor(W.rows(), [&](std::size_t b, std::size_t e) {
-    for (std::size_t row = b; row < e; ++row) rowSpan(marks.get() + row * nx, nx, first[row], last[row]);
-  }, 256);
-
-  std::atomic<std::size_t> filledInVoi{0};
-  if (extrapolate) {
-    // 3b. Voxels outside the posed mesh that the extrapolation left empty (or background) although at
-    // least 5 of their 6 neighbours were written with tissue: gaps where the rest point of every
-    // candidate tet fell on background or outside the rest grid, e.g. in a crease where two skin
-    // surfaces of the posed body meet. They are filled from those neighbours (the most common label, or
-    // the mean intensity), so the posed skin has no pinholes. Voxels inside the posed mesh are never touched.
-    // Such a voxel has at least 3 written neighbours in the 4 adjacent rows, so only rows next to
-    // written rows are visited.
-    auto hasSpan = [&](int j, int k) {
-      if (j < 0 || j >= ny || k < 0 || k >= nz) return false;
-      const std::size_t row = std::size_t(k) * ny + std::size_t(j);
-      return first[row] <= last[row];
-    };
-    // Repeated while it fills anything: a voxel filled in one pass counts as written in the next
-    // (within a pass marks do not change, so the result does not depend on the thread count).
-    constexpr std::uint8_t kFilled = 4;
-    // The 4 rows adjacent to row (j, k): how many hold written voxels, and the union [ib, ie] of
-    // their spans.
-    auto adjacentSpans = [&](int j, int k, int& ib, int& ie) {
-      const int nbr[4][2] = {{j - 1, k}, {j + 1, k}, {j, k - 1}, {j, k + 1}};
-      int count = 0;
-      ib = nx, ie = -1;
-      for (const auto& jk : nbr)
-        if (hasSpan(jk[0], jk[1])) {
-          ++count;
-          const std::size_t row = std::size_t(jk[1]) * ny + std::size_t(jk[0]);
-          ib = std::min(ib, first[row]);
-          ie = std::max(ie, last[row]);
-        }
-      return count;
-    };
-    // The row test for voxel (i, j, k): at least 3 of the 4 adjacent rows hold written voxels and
-    // i lies within their spans.
-    auto inSpans = [&](int i, int j, int k) {
-      int ib, ie;
-      return adjacentSpans(j, k, ib, ie) >= 3 && i >= ib && i <= ie;
-    };
-    // Voxel v = (i, j, k) filled in this pass: appended to `to` (written after the pass).
-    auto tryFill = [&](int i, int j, int k, std::vector<std::pair<std::size_t, T>>& to, std::size_t& local) {
-      const std::size_t v = std::size_t(k) * sliceSize + std::size_t(j) * nx + std::size_t(i);
-      // Also an extrapolated intensity voxel that equals the background value.
-      if (marks[v] != kEmpty && !(marks[v] == kExtrapolated && out[v] == background)) return;
-      T values[6];
-      int n = 0;
-      auto take = [&](bool ok, std::size_t w) {
-        if (ok && marks[w] != kEmpty && !(out[w] == background)) values[n++] = out[w];
-      };
-      take(i > 0, v - 1);
-      take(i + 1 < nx, v + 1);
-      take(j > 0, v - std::size_t(nx));
-      take(j + 1 < ny, v + std::size_t(nx));
-      take(k > 0, v - sliceSize);
-      take(k + 1 < nz, v + sliceSize);
-      if (n < 5) return;
-      to.emplace_back(v, combine(values, n));
-      const int gi = i + W.lo[0], gj = j + W.lo[1], gk = k + W.lo[2];
-      local += gi >= voi.lo[0] && gi <= voi.hi[0] && gj >= voi.lo[1] && gj <= voi.hi[1] && gk >= voi.lo[2] &&
-               gk <= voi.hi[2];
-    };
-    // The first pass visits all rows next to written rows; later passes only the neighbours of the
-    // voxels the previous pass filled (no other voxel's neighbourhood changed).
-    std::vector<std::vector<std::pair<std::size_t, T>>> filled(static_cast<std::size_t>(nz));
-    parallelFor(std::size_t(nz), [&](std::size_t kb, std::size_t ke) {
-      std::size_t local = 0;
-      for (int k = int(kb); k < int(ke); ++k)
-        for (int j = 0; j < ny; ++j) {
-          int ib, ie;
-          if (adjacentSpans(j, k, ib, ie) < 3) continue;
-          for (int i = ib; i <= ie; ++i) tryFill(i, j, k, filled[std::size_t(k)], local);
-        }
-      filledInVoi += local;
-    }, 1);
-    std::vector<std::size_t> prev;
-    for (int pass = 0; pass < 4; ++pass) {
-      prev.clear();
-      for (auto& f : filled) {
-        for (const auto& [v, value] : f) {
-          out[v] = value;
-          marks[v] = kFilled;
-          prev.push_back(v);
-        }
-        f.clear();
-      }
-      if (prev.empty() || pass == 3) break;
-      std::vector<std::size_t> next;
-      next.reserve(6 * prev.size());
-      for (const std::size_t v : prev) {
-        const std::size_t row = v / std::size_t(nx);
-        const int i = int(v - row * std::size_t(nx));
-        const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
-        if (i > 0) next.push_back(v - 1);
-        if (i + 1 < nx) next.push_back(v + 1);
-        if (j > 0) next.push_back(v - std::size_t(nx));
-        if (j + 1 < ny) next.push_back(v + std::size_t(nx));
-        if (k > 0) next.push_back(v - sliceSize);
-        if (k + 1 < nz) next.push_back(v + sliceSize);
-      }
-      std::sort(next.begin(), next.end());
-      next.erase(std::unique(next.begin(), next.end()), next.end());
-      // Candidates in slice order, so `filled` stays per slice.
-      std::size_t local = 0;
-      for (const std::size_t v : next) {
-        const std::size_t row = v / std::size_t(nx);
-        const int i = int(v - row * std::size_t(nx));
-        const int j = int(row % std::size_t(ny)), k = int(row / std::size_t(ny));
-        if (inSpans(i, j, k)) tryFill(i, j, k, filled[std::size_t(k)], local);
-      }
-      filledInVoi += local;
-    }
-  }
-
-  // Counts over the requested voxels; then those voxels into dst when the work box is larger.
-  std::atomic<std::size_t> covered{0}, extended{0};
-  parallelFor(std::size_t(voi.n[2]), [&](std::size_t kb, std::size_t ke) {
-    std::size_t c = 0, x = 0;
-    for (int k = voi.lo[2] + int(kb); k < voi.lo[2] + int(ke); ++k)
-      for (int j = voi.lo[1]; j <= voi.hi[1]; ++j) {
-        const std::size_t row = std::size_t(k - W.lo[2]) * ny + std::size_t(j - W.lo[1]);
-        const std::size_t base = W.index(voi.lo[0], j, k);
-        if (!direct)
-          std::copy(out + base, out + base + voi.n[0], dst + voi.index(voi.lo[0], j, k));
-        const int ib = std::max(first[row], voi.lo[0] - W.lo[0]), ie = std::min(last[row], voi.hi[0] - W.lo[0]);
-        for (int i = ib; i <= ie; ++i) {
-          const std::uint8_t m = marks[row * nx + std::size_t(i)];
-          c += m == kCovered;
-          x += m == kExtrapolated;
-        }
-      }
-    covered += c;
-    extended += x;
-  }, 1);
-  if (report) {
-    report->outputVoxels = voi.count();
-    report->coveredVoxels = covered.load();
-    report->extrapolatedVoxels = extended.load() + filledInVoi.load();
-    report->invertedTets = inverted;
-    report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  }
+  PullResampler<Kernel>(restGrid, restNodes, posedNodes, tets, outGrid, options, kernel, background, voi, dst)
+      .run(combine, report, start);
 }
 
 Box voiOf(const ImageGrid& outGrid, const PullResampleOptions& options) {
