@@ -14,10 +14,11 @@
 namespace repose {
 namespace {
 
-LabelTableChoice builtinLabelTable(const std::string& labelsPath) {
+LabelTableChoice builtinLabelTable(const std::string& labelsPath, const std::string& option) {
   LabelTableChoice c;
   c.table = builtinTotalSegmentatorTable();
-  c.origin = "built-in TotalSegmentator names (no --label-table given, none found beside " + labelsPath + ")";
+  c.origin = "built-in TotalSegmentator names (no " + option + " given, none found beside " + labelsPath + ")";
+  c.option = option;
   return c;
 }
 
@@ -36,8 +37,10 @@ LabelTable readLabelTable(const std::string& path, const std::string& text) {
 
 }  // namespace
 
-LabelTableChoice chooseLabelTable(const std::string& labelsPath, const std::string& labelTablePath) {
+LabelTableChoice chooseLabelTable(const std::string& labelsPath, const std::string& labelTablePath,
+                                  const std::string& option) {
   LabelTableChoice c;
+  c.option = option;
   if (!labelTablePath.empty()) {
     c.path = labelTablePath;
     c.text = readTextFile(c.path);
@@ -59,7 +62,7 @@ LabelTableChoice chooseLabelTable(const std::string& labelsPath, const std::stri
     c.origin = path + " (found beside " + labelsPath + ")";
     return c;
   }
-  return builtinLabelTable(labelsPath);
+  return builtinLabelTable(labelsPath, option);
 }
 
 void requireTableFits(vtkImageData* labels, const std::string& labelsPath, const LabelTableChoice& c) {
@@ -68,14 +71,15 @@ void requireTableFits(vtkImageData* labels, const std::string& labelsPath, const
   const LabelTableFit fit = checkLabelTableFit(volume, c.table);
   if (fit.fits()) return;
   if (c.path.empty())
-    throw std::runtime_error(labelsPath + ": the built-in TotalSegmentator names do not fit it (no --label-table given, "
-                             "none found beside it): " + fit.problem() + "; give its label table with --label-table");
+    throw std::runtime_error(labelsPath + ": the built-in TotalSegmentator names do not fit it (no " + c.option +
+                             " given, none found beside it): " + fit.problem() + "; give its label table with " + c.option);
   throw std::runtime_error(c.path + ": does not fit " + labelsPath + ": " + fit.problem() +
-                           "; give the volume's own label table with --label-table");
+                           "; give the volume's own label table with " + c.option);
 }
 
-std::string caseLabelTable(vtkImageData* labels, const std::string& labelsPath, const std::string& labelTablePath) {
-  const LabelTableChoice c = chooseLabelTable(labelsPath, labelTablePath);
+std::string caseLabelTable(vtkImageData* labels, const std::string& labelsPath, const std::string& labelTablePath,
+                           const std::string& option) {
+  const LabelTableChoice c = chooseLabelTable(labelsPath, labelTablePath, option);
   if (!c.path.empty()) {
     std::cout << "label table: " << c.origin << std::endl;
     return labelTableToTsv(c.table);

@@ -661,7 +661,19 @@ void Pipeline::setPose(const std::string& poseJson, const std::string& poseName)
 
 void Pipeline::setPose(const Pose& pose) {
   if (!skinning_) throw std::runtime_error("no case loaded");
-  skinning_->SetPoseJSON(poseToJson(pose).c_str());
+  skinning_->SetPose(pose);
+}
+
+std::vector<Eigen::Isometry3d> Pipeline::boneTransforms() const {
+  std::vector<Eigen::Isometry3d> bones;
+  if (!skinning_) return bones;
+  bones.resize(std::size_t(skinning_->GetNumberOfBoneTransforms()));
+  for (std::size_t j = 0; j < bones.size(); ++j) {
+    Eigen::Matrix<double, 4, 4, Eigen::RowMajor> m;
+    skinning_->GetBoneTransform(int(j), m.data());
+    bones[j].matrix() = m;
+  }
+  return bones;
 }
 
 namespace {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <vtkImageData.h>  // complete for the inline accessors below
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
@@ -112,8 +113,12 @@ public:
   // --- posing --------------------------------------------------------------------------------
   /// Validates (unknown joints, NaN, zero axis) and sets the pose; throws std::runtime_error.
   void setPose(const std::string& poseJson, const std::string& poseName);
-  /// Sets an already validated pose (e.g. retargeted from motion capture).
+  /// Sets an already validated pose (e.g. retargeted from motion capture, or the GUI's sliders):
+  /// typed all the way to the skinning, posed to the same bits as its JSON.
   void setPose(const Pose& pose);
+  /// The bone transforms (rest -> posed, one per joint) the last posed mesh was skinned with: for
+  /// drawing the skeleton without a second pass of forward kinematics. Empty before posedMesh().
+  std::vector<Eigen::Isometry3d> boneTransforms() const;
   void setSkinningMethod(const std::string& method);  ///< "dqs" | "lbs"
   /// Corotational FEM relaxation of the skinned mesh (bone nodes stay rigid); everything posed
   /// downstream (surfaces, volumes) then follows the relaxed mesh.

@@ -14,8 +14,8 @@
 namespace repose {
 
 RigResult rigLabels(vtkImageData* labels, const std::string& labelsName, const std::string& labelTablePath,
-                    double maxGapMm) {
-  const LabelTableChoice table = chooseLabelTable(labelsName, labelTablePath);
+                    double maxGapMm, const std::string& labelTableOption) {
+  const LabelTableChoice table = chooseLabelTable(labelsName, labelTablePath, labelTableOption);
   requireTableFits(labels, labelsName, table);
   auto rig = vtkSmartPointer<vtkReposeAutoRig>::New();
   rig->SetInputData(labels);
@@ -34,7 +34,7 @@ RigResult rigLabels(vtkImageData* labels, const std::string& labelsName, const s
   if (rig->GetNumberOfJoints() < 2)
     throw std::runtime_error(labelsName + ": the automatic skeleton found " + std::to_string(rig->GetNumberOfJoints()) +
                              " joint(s) with the label table " + (table.path.empty() ? "of TotalSegmentator" : table.path) +
-                             "; name the bones with --label-table or write skeleton.json by hand");
+                             "; name the bones with " + labelTableOption + " or write skeleton.json by hand");
   vtkDataArray* a = labels->GetPointData()->GetScalars();
   vtkDataArray* b = r.labels->GetPointData()->GetScalars();
   for (vtkIdType i = 0, n = a->GetNumberOfTuples(); i < n && !r.relabelled; ++i)
@@ -51,7 +51,7 @@ ScanForPreparation readScanForPreparation(const ScanSource& source,
   scan.labels = readLabelVolume(source.labelsPath);
   if (source.skeletonPath == "auto") {
     tell("finding the skeleton from the bone labels");
-    RigResult r = rigLabels(scan.labels, source.labelsPath, source.labelTablePath, source.maxGapMm);
+    RigResult r = rigLabels(scan.labels, source.labelsPath, source.labelTablePath, source.maxGapMm, source.labelTableOption);
     scan.labels = r.labels;
     scan.skeletonJson = r.skeletonJson;
     scan.skeletonName = "automatic skeleton";
@@ -60,7 +60,7 @@ ScanForPreparation readScanForPreparation(const ScanSource& source,
   } else {
     scan.skeletonJson = readTextFile(source.skeletonPath);
     scan.skeletonName = source.skeletonPath;
-    scan.tableTsv = caseLabelTable(scan.labels, source.labelsPath, source.labelTablePath);
+    scan.tableTsv = caseLabelTable(scan.labels, source.labelsPath, source.labelTablePath, source.labelTableOption);
   }
   if (!source.imagePath.empty()) {
     tell("reading " + source.imagePath);

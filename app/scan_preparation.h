@@ -23,7 +23,7 @@ struct RigResult {
 /// largest bone gap maxGapMm. Throws std::runtime_error naming labelsName when the table does not fit
 /// or fewer than 2 joints are found.
 RigResult rigLabels(vtkImageData* labels, const std::string& labelsName, const std::string& labelTablePath,
-                    double maxGapMm = 6.0);
+                    double maxGapMm = 6.0, const std::string& labelTableOption = "--label-table");
 
 struct ScanSource {
   std::string labelsPath;
@@ -32,6 +32,7 @@ struct ScanSource {
   std::string imagePath;              ///< "" = no CT; a folder = a DICOM series
   std::string seriesUid;              ///< the series to read from a folder of several
   double maxGapMm = 6.0;              ///< for "auto"
+  std::string labelTableOption = "--label-table";  ///< how the user gives a table, for messages
 };
 
 struct ScanForPreparation {

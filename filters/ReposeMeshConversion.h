@@ -11,7 +11,6 @@
 #include "vtkNew.h"
 #include "vtkPolyData.h"
 #include "vtkDataArray.h"
-#include "vtkFloatArray.h"
 #include "vtkPoints.h"
 #include "vtkSmartPointer.h"
 #include "vtkUnstructuredGrid.h"
@@ -106,20 +105,6 @@ inline repose::Triangles ToTriangleFans(vtkPolyData* surface)
   repose::Triangles F(static_cast<Eigen::Index>(tris.size() / 3), 3);
   std::copy(tris.begin(), tris.end(), F.data());
   return F;
-}
-
-/// Float vtkPoints holding P's rows (the type the skinning filter writes).
-inline vtkSmartPointer<vtkPoints> ToFloatPoints(const repose::Points& P)
-{
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetDataTypeToFloat();
-  points->SetNumberOfPoints(P.rows());
-  float* dst = vtkFloatArray::SafeDownCast(points->GetData())->GetPointer(0);
-  for (Eigen::Index i = 0; i < P.size(); ++i)
-  {
-    dst[i] = static_cast<float>(P.data()[i]);
-  }
-  return points;
 }
 
 } // namespace repose_vtk

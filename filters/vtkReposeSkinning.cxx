@@ -25,6 +25,7 @@
 #include <string>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 vtkStandardNewMacro(vtkReposeSkinning);
@@ -40,6 +41,12 @@ struct vtkReposeSkinning::Internals
   // The skeleton parsed from SkeletonJSON, kept while the text is the same.
   std::string SkeletonText;
   repose::Skeleton Skeleton;
+  // A pose given by SetPose (then PoseJSON is null), its text made only if asked for.
+  bool HasTypedPose = false;
+  repose::Pose TypedPose;
+  std::string TypedPoseText;
+  // The bone transforms the last successful run skinned with.
+  std::vector<Eigen::Isometry3d> Bones;
 
   void Convert(vtkUnstructuredGrid* input)
   {
@@ -80,6 +87,51 @@ vtkReposeSkinning::~vtkReposeSkinning()
   delete this->Internal;
 }
 
+void vtkReposeSkinning::SetPoseJSON(const char* poseJson)
+{
+  const bool same = this->PoseJSON && poseJson ? std::strcmp(this->PoseJSON, poseJson) == 0
+                                                : this->PoseJSON == poseJson;
+  if (same && !this->Internal->HasTypedPose)
+    return;
+  delete[] this->PoseJSON;
+  this->PoseJSON = poseJson ? std::strcpy(new char[std::strlen(poseJson) + 1], poseJson) : nullptr;
+  this->Internal->HasTypedPose = false;
+  this->Modified();
+}
+
+const char* vtkReposeSkinning::GetPoseJSON()
+{
+  if (!this->Internal->HasTypedPose)
+    return this->PoseJSON;
+  this->Internal->TypedPoseText = repose::poseToJson(this->Internal->TypedPose);
+  return this->Internal->TypedPoseText.c_str();
+}
+
+void vtkReposeSkinning::SetPose(const repose::Pose& pose)
+{
+  this->Internal->TypedPose = repose::canonicalPose(pose);
+  this->Internal->HasTypedPose = true;
+  delete[] this->PoseJSON;
+  this->PoseJSON = nullptr;
+  this->Modified();
+}
+
+int vtkReposeSkinning::GetNumberOfBoneTransforms()
+{
+  return static_cast<int>(this->Internal->Bones.size());
+}
+
+bool vtkReposeSkinning::GetBoneTransform(int joint, double matrix[16])
+{
+  if (joint < 0 || joint >= this->GetNumberOfBoneTransforms())
+    return false;
+  const Eigen::Matrix4d m = this->Internal->Bones[static_cast<std::size_t>(joint)].matrix();
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c)
+      matrix[4 * r + c] = m(r, c);
+  return true;
+}
+
 const char* vtkReposeSkinning::GetSkinningMethodAsString()
 {
   return this->SkinningMethod == LinearBlend ? "LinearBlend" : "DualQuaternion";
@@ -117,9 +169,10 @@ int vtkReposeSkinning::RequestData(
       in.SkeletonText = this->SkeletonJSON;
     }
     const repose::Skeleton& skeleton = in.Skeleton;
-    const repose::Pose pose =
-      (this->PoseJSON && *this->PoseJSON) ? repose::parsePoseJson(this->PoseJSON) : repose::Pose{};
-    const std::vector<Eigen::Isometry3d> bones = repose::forwardKinematics(skeleton, pose);
+    const repose::Pose pose = in.HasTypedPose ? in.TypedPose
+      : (this->PoseJSON && *this->PoseJSON)   ? repose::parsePoseJson(this->PoseJSON)
+                                              : repose::Pose{};
+    std::vector<Eigen::Isometry3d> bones = repose::forwardKinematics(skeleton, pose);
 
     this->LastRunUsedCache = in.CachedInput == input && in.CachedInputTime == input->GetMTime();
     if (!this->LastRunUsedCache)
@@ -150,6 +203,7 @@ int vtkReposeSkinning::RequestData(
 
     output->ShallowCopy(input);
     output->SetPoints(in.Posed);
+    in.Bones = std::move(bones);
   }
   catch (const std::exception& e)
   {
@@ -165,7 +219,8 @@ void vtkReposeSkinning::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "SkeletonJSON: " << (this->SkeletonJSON ? "(set)" : "(none)") << "\n";
-  os << indent << "PoseJSON: " << (this->PoseJSON ? this->PoseJSON : "(rest pose)") << "\n";
+  const char* pose = this->GetPoseJSON();
+  os << indent << "PoseJSON: " << (pose ? pose : "(rest pose)") << "\n";
   os << indent << "SkinningMethod: " << this->GetSkinningMethodAsString() << "\n";
   os << indent << "LastSkinningTime: " << this->LastSkinningTime << "\n";
 }

@@ -4,6 +4,8 @@
 // (default) or linear-blend skinning of every node. Input: the output of vtkReposeBoneWeights
 // (point data "Weights", "BoneIds", optional "FixedBone": fixed nodes move rigidly with their bone).
 // Output: same topology and data, posed float points (~1e-4 mm rounding at 1 m coordinates).
+// C++ callers that pose every frame give a typed pose (SetPose) and read back the bone transforms
+// the mesh was skinned with (GetBoneTransform): no text and one pass of forward kinematics per frame.
 // The rest points and weights are converted once per input change (to a compact float cache); a new
 // pose (or method) only re-runs the skinning itself, in place: the output vtkPoints object is reused
 // (and marked Modified) while the node count is unchanged, so a consumer holding on to an earlier
@@ -13,6 +15,13 @@
 #include "vtkUnstructuredGridAlgorithm.h"
 
 #include <string>
+
+#ifndef __VTK_WRAP__
+namespace repose
+{
+struct Pose;  // pose.h
+}
+#endif
 
 class REPOSEFILTERS_EXPORT vtkReposeSkinning : public vtkUnstructuredGridAlgorithm
 {
@@ -30,9 +39,22 @@ public:
   /// skeleton.json text (required).
   vtkSetStringMacro(SkeletonJSON);
   vtkGetStringMacro(SkeletonJSON);
-  /// pose.json text; empty means the rest pose.
-  vtkSetStringMacro(PoseJSON);
-  vtkGetStringMacro(PoseJSON);
+  /// pose.json text; empty means the rest pose. Replaces a pose given by SetPose.
+  virtual void SetPoseJSON(const char* poseJson);
+  /// The pose as pose.json text (a pose given by SetPose comes back exact, as quaternions).
+  virtual const char* GetPoseJSON();
+#ifndef __VTK_WRAP__
+  /// A typed pose (pose.h), for C++ callers that pose every frame without text on the way: the mesh
+  /// comes out bit for bit as from SetPoseJSON(poseToJson(pose)). Throws std::invalid_argument on a
+  /// zero or non-finite rotation; joint names are checked when the filter runs.
+  void SetPose(const repose::Pose& pose);
+#endif
+  /// The bone transforms of the last successful run (rest -> posed, mm; one per joint in the
+  /// skeleton's order): what the mesh was skinned with, so a view can draw the skeleton without
+  /// running forward kinematics again. 0 before the first run.
+  int GetNumberOfBoneTransforms();
+  /// Joint `joint`'s transform as a row-major 4x4 matrix; false if there is no such joint.
+  bool GetBoneTransform(int joint, double matrix[16]);
 
   vtkSetClampMacro(SkinningMethod, int, DualQuaternion, LinearBlend);
   vtkGetMacro(SkinningMethod, int);

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
@@ -179,6 +180,39 @@ TEST(Pose, JsonRoundTrip) {
   ASSERT_EQ(q.rotations.size(), 1u);
   EXPECT_NEAR(q.rotations.at("forearm").dot(p.rotations.at("forearm")), 1.0, 1e-15);
   EXPECT_EQ(q.translation, p.translation);
+}
+
+// The typed route (canonicalPose) must pose to the bits the text route does: every rotation as
+// parsePoseJson(poseToJson(p)) reads it back, non-unit and huge quaternions included.
+TEST(Pose, CanonicalPoseEqualsItsJsonReadBackBitForBit) {
+  std::srand(7);
+  auto r = [] { return 2.0 * std::rand() / RAND_MAX - 1.0; };
+  for (int trial = 0; trial < 200; ++trial) {
+    repose::Pose p;
+    const double scale = trial % 3 == 0 ? 1.0 : trial % 3 == 1 ? 1e-6 : 1e200;
+    for (const char* joint : {"upperarm", "forearm", "hand"})
+      p.rotations[joint] = Eigen::Quaterniond(scale * r(), scale * r(), scale * r(), scale * r());
+    p.translation = Eigen::Vector3d(1e3 * r(), r(), 1e-3 * r());
+    const repose::Pose typed = repose::canonicalPose(p);
+    const repose::Pose text = repose::parsePoseJson(repose::poseToJson(p));
+    ASSERT_EQ(typed.rotations.size(), text.rotations.size());
+    for (const auto& [joint, q] : text.rotations)
+      EXPECT_EQ(typed.rotations.at(joint).coeffs(), q.coeffs()) << joint << " in trial " << trial;
+    EXPECT_EQ(typed.translation, text.translation);
+    EXPECT_NEAR(typed.rotations.at("hand").norm(), 1.0, 1e-15);
+  }
+}
+
+TEST(Pose, CanonicalPoseRefusesWhatTheParserRefuses) {
+  repose::Pose zero;
+  zero.rotations["hand"] = Eigen::Quaterniond(0, 0, 0, 0);
+  expectError([&] { repose::canonicalPose(zero); }, {"hand", "zero"});
+  repose::Pose nan;
+  nan.rotations["hand"] = Eigen::Quaterniond(std::nan(""), 0, 0, 1);
+  expectError([&] { repose::canonicalPose(nan); }, {"hand", "non-finite"});
+  repose::Pose far;
+  far.translation.x() = INFINITY;
+  expectError([&] { repose::canonicalPose(far); }, {"translation", "non-finite"});
 }
 
 TEST(Pose, ErrorsNameTheProblem) {

@@ -606,7 +606,7 @@ void MainWindow::poseChanged() {
     vtkPolyData* posed = pipeline_->posedSurfaces();
     const auto t2 = Clock::now();
     scene_->setInteractive(controller_.editing() || animation_->playing());
-    scene_->updatePose(posed, controller_.globalTransforms());
+    scene_->updatePose(posed, pipeline_->boneTransforms());
     scene_->render();
     timing_.skinning = std::chrono::duration<double>(t1 - t0).count();
     timing_.surfaces = std::chrono::duration<double>(t2 - t1).count();
@@ -816,7 +816,7 @@ void MainWindow::relaxDone() {
   relaxSummary_ = QString::fromStdString(pipeline_->relaxationSummary());
   relaxLabel_->setText("After relaxation (solid) vs before (wireframe).\n" + relaxSummary_);
   guarded([&] {
-    scene_->updatePose(pipeline_->posedSurfaces(), controller_.globalTransforms());
+    scene_->updatePose(pipeline_->posedSurfaces(), pipeline_->boneTransforms());
     scene_->setGhost(showBefore_->isChecked() ? beforeSurfaces_.Get() : nullptr);
     scene_->render();
   });

@@ -105,6 +105,7 @@ void PreprocessWorker::open() {
     ScanSource source;
     source.labelsPath = labelsPath;
     source.labelTablePath = request_.labelTablePath.toStdString();
+    source.labelTableOption = "\"Label table .tsv\"";  // the Open a scan dialog's field
     source.imagePath = request_.imagePath.toStdString();
     if (!request_.autoSkeleton) {
       if (request_.skeletonPath.isEmpty()) throw std::runtime_error("choose a skeleton.json or the automatic skeleton");

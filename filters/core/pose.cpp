@@ -32,6 +32,15 @@ Eigen::Matrix<double, N, 1> readVector(const Json::Value& v, const std::string& 
   return out;
 }
 
+// q = [w,x,y,z] made unit. stableNorm: a plain norm overflows for components near 1e300 and the
+// result is not unit.
+Eigen::Quaterniond unitQuaternion(const Eigen::Vector4d& q, const std::string& where) {
+  if (!q.allFinite()) fail(where + ": \"quaternion\" has a non-finite value (NaN or inf)");
+  if (q.stableNorm() < 1e-12) fail(where + ": \"quaternion\" is zero");
+  const Eigen::Vector4d u = q.stableNormalized();
+  return Eigen::Quaterniond(u[0], u[1], u[2], u[3]);
+}
+
 Eigen::Quaterniond readRotation(const std::string& joint, const Json::Value& r) {
   const std::string where = "rotation of joint '" + joint + "'";
   if (!r.isObject()) fail(where + " must be an object with \"axis\"+\"degrees\" or \"quaternion\"");
@@ -39,12 +48,7 @@ Eigen::Quaterniond readRotation(const std::string& joint, const Json::Value& r) 
   const bool hasQuat = r.isMember("quaternion");
   if (hasAxis && hasQuat) fail(where + " has both \"axis\"/\"degrees\" and \"quaternion\"; give one");
   if (hasQuat) {
-    const Eigen::Vector4d q = readVector<4>(r["quaternion"], where + ": \"quaternion\" [w,x,y,z]");
-    // stableNorm: a plain norm overflows for components near 1e300 and the result is not unit.
-    const double n = q.stableNorm();
-    if (n < 1e-12) fail(where + ": \"quaternion\" is zero");
-    const Eigen::Vector4d u = q.stableNormalized();
-    return Eigen::Quaterniond(u[0], u[1], u[2], u[3]);
+    return unitQuaternion(readVector<4>(r["quaternion"], where + ": \"quaternion\" [w,x,y,z]"), where);
   }
   if (!hasAxis) fail(where + " needs \"axis\" and \"degrees\", or \"quaternion\"");
   if (!r.isMember("axis")) fail(where + " has \"degrees\" but no \"axis\"");
@@ -105,6 +109,16 @@ std::string poseToJson(const Pose& pose) {
     r["quaternion"] = quat;
     return r;
   });
+}
+
+Pose canonicalPose(const Pose& pose) {
+  Pose out;
+  for (const auto& [joint, q] : pose.rotations)
+    out.rotations[joint] =
+      unitQuaternion(Eigen::Vector4d(q.w(), q.x(), q.y(), q.z()), "rotation of joint '" + joint + "'");
+  if (!pose.translation.allFinite()) fail("\"translation\" has a non-finite value (NaN or inf)");
+  out.translation = pose.translation;
+  return out;
 }
 
 std::string poseToAxisAngleJson(const Pose& pose) {

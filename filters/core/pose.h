@@ -22,6 +22,10 @@ struct Pose {
 Pose parsePoseJson(const std::string& text);
 /// Exact (quaternions, 17 digits): for passing a pose between programs.
 std::string poseToJson(const Pose& pose);
+/// The pose as parsePoseJson(poseToJson(pose)) reads it back, without the text: each quaternion made
+/// unit the way the parser does it, so a typed pose and its JSON pose the mesh to the same bits.
+/// Throws std::invalid_argument on a zero or non-finite rotation or translation, like the parser.
+Pose canonicalPose(const Pose& pose);
 /// For a person to read and edit: every rotation as {"axis": [x,y,z] (unit), "degrees": a} with a in
 /// [0, 180], 12 significant digits (parsePoseJson reads it back to 1e-10 degrees).
 std::string poseToAxisAngleJson(const Pose& pose);
