@@ -54,4 +54,15 @@ void writeChecked(Writer* writer, const std::string& path, const std::string& ta
   checkWritten(written, writer->GetErrorCode(), errno, path, tail);
 }
 
+/// Writes `data` with a VTK XML writer (appended raw binary, the version stamped) and checks it.
+template <class Writer, class Data>
+void writeVtkXml(Data* data, const std::string& path) {
+  auto writer = vtkSmartPointer<Writer>::New();
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(withVersion(data));
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  writeChecked(writer.Get(), path, kVtkXmlTail);
+}
+
 }  // namespace repose

@@ -145,12 +145,7 @@ void writeSurfaceMesh(vtkPolyData* mesh, const std::string& path) {
     w->SetFileTypeToBinary();
     writeChecked(w.Get(), path, "");
   } else if (ext == ".vtp") {
-    auto w = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
-    w->SetFileName(path.c_str());
-    w->SetInputData(withVersion(mesh));
-    w->SetDataModeToAppended();
-    w->EncodeAppendedDataOff();
-    writeChecked(w.Get(), path, kVtkXmlTail);
+    writeVtkXml<vtkXMLPolyDataWriter>(mesh, path);
   } else if (ext == ".vtk") {
     auto w = vtkSmartPointer<vtkPolyDataWriter>::New();
     w->SetFileName(path.c_str());

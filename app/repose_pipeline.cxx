@@ -2,52 +2,34 @@
 
 #include <optional>
 
-#include "mesh_file_claims.h"
+#include "case_files.h"
 #include "mesh_io.h"
 #include "json_text.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <initializer_list>
-#include <iomanip>
 #include <set>
 #include <sstream>
 #include <stdexcept>
-#include <utility>
 
 #include <json/json.h>
 
 #include <vtkAlgorithm.h>
-#include <vtkCommand.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
-#include <vtkExecutive.h>
-#include <vtkFieldData.h>
 #include <vtkFloatArray.h>
-#include <vtkIdList.h>
 #include <vtkImageData.h>
 #include <vtkPoints.h>
-#include <vtkIntArray.h>
-#include <vtkMatrix3x3.h>
 #include <vtkPointData.h>
 #include <vtkPointSet.h>
 #include <vtkPolyData.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkXMLPolyDataReader.h>
-#include <vtkXMLPolyDataWriter.h>
-#include <vtkXMLUnstructuredGridReader.h>
-#include <vtkXMLUnstructuredGridWriter.h>
 
 #include "ReposeMeshConversion.h"
 #include "vtkReposeBodyMesher.h"
 #include "vtkReposeCorotationalRelax.h"
-#include "vtkReposeDicomSeriesWriter.h"
-#include "repose_version.h"
 #include "vtkReposeBoneWeights.h"
-#include "vtkReposeImageReader.h"
-#include "vtkReposeImageWriter.h"
 #include "vtkReposePosedVolume.h"
 #include "vtkReposeSkinning.h"
 #include "vtkReposeSurfaceBinding.h"
@@ -55,7 +37,6 @@
 #include "vtkReposeSurfaceExtractor.h"
 
 #include "atomic_outputs.h"
-#include "checked_write.h"
 #include "pose.h"
 #include "skeleton.h"
 #include "deformation_stats.h"
@@ -72,337 +53,7 @@ double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-vtkSmartPointer<vtkImageData> readImageFile(const std::string& path, const std::string& seriesUid = "") {
-  if (!fileExists(path)) throw std::runtime_error(path + ": no such file");
-  auto reader = vtkSmartPointer<vtkReposeImageReader>::New();
-  reader->SetFileName(path.c_str());
-  if (!seriesUid.empty()) reader->SetSeriesUID(seriesUid.c_str());
-  reader->Update();
-  if (reader->GetLastError() && *reader->GetLastError())
-    throw std::runtime_error(reader->GetLastError());
-  vtkImageData* out = reader->GetOutput();
-  if (!out || !out->GetPointData()->GetScalars())
-    throw std::runtime_error(path + ": cannot read image");
-  auto image = vtkSmartPointer<vtkImageData>::New();
-  image->ShallowCopy(out);
-  return image;
-}
-
-/// Records the last error a VTK filter reported through vtkErrorMacro (the core's message), so it
-/// can be shown to the user as one line instead of VTK's multi-line console text.
-class ErrorCapture : public vtkCommand {
-public:
-  static ErrorCapture* New() { return new ErrorCapture; }
-  void Execute(vtkObject*, unsigned long, void* callData) override {
-    std::string text = callData ? static_cast<const char*>(callData) : "";
-    const auto pos = text.find("): ");
-    if (pos != std::string::npos) text = text.substr(pos + 3);
-    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-    for (char& c : text)
-      if (c == '\n') c = ' ';
-    last = text;
-  }
-  std::string last;
-};
-
-vtkSmartPointer<ErrorCapture> captureErrors(vtkAlgorithm* filter) {
-  auto capture = vtkSmartPointer<ErrorCapture>::New();
-  filter->AddObserver(vtkCommand::ErrorEvent, capture);
-  return capture;
-}
-
-/// Checks a filter ran; the filters report core errors through vtkErrorMacro and an empty output.
-void requireOutput(bool ok, const std::string& what, const ErrorCapture* errors) {
-  if (!ok)
-    throw std::runtime_error(what + " failed" + (errors && !errors->last.empty() ? ": " + errors->last : std::string()));
-}
-
-std::string describeGrid(vtkImageData* image) {
-  int d[3];
-  double o[3], s[3];
-  image->GetDimensions(d);
-  image->GetOrigin(o);
-  image->GetSpacing(s);
-  std::ostringstream m;
-  m << d[0] << "x" << d[1] << "x" << d[2] << " voxels of " << s[0] << "x" << s[1] << "x" << s[2]
-    << " mm at (" << o[0] << ", " << o[1] << ", " << o[2] << ")";
-  return m.str();
-}
-
-
-constexpr int kCaseVersion = 1;
-
-/// A JSON value as a short one-line text for messages.
-std::string brief(const Json::Value& value) {
-  Json::StreamWriterBuilder builder;
-  builder["indentation"] = "";
-  const std::string text = Json::writeString(builder, value);
-  return text.size() > 40 ? text.substr(0, 40) + "..." : text;
-}
-
-/// A file named by the case manifest: a plain name inside the case folder, never a path leaving it.
-std::string caseFile(const std::string& caseDir, const Json::Value& manifest, const char* key,
-                     const std::string& manifestPath) {
-  const Json::Value& name = manifest[key];
-  const std::string text = name.isString() ? name.asString() : std::string();
-  if (text.empty() || text == "." || text == ".." || text.find_first_of("/\\") != std::string::npos)
-    throw std::runtime_error(manifestPath + ": \"" + key + "\" must name a file inside the case folder, not '" +
-                             (name.isString() ? text : brief(name)) + "'");
-  return caseDir + "/" + text;
-}
-
-/// Reads a VTK XML file, its claims checked first; errors name the file on one line.
-template <class Reader>
-vtkSmartPointer<vtkPointSet> readXmlMesh(const std::string& path) {
-  try {
-    checkMeshFileClaims(path);
-  } catch (const std::runtime_error& e) {
-    throw std::runtime_error(path + ": " + e.what());
-  }
-  auto reader = vtkSmartPointer<Reader>::New();
-  reader->SetFileName(path.c_str());
-  auto errors = captureErrors(reader);
-  reader->Update();
-  vtkPointSet* out = vtkPointSet::SafeDownCast(reader->GetOutputDataObject(0));
-  if (!errors->last.empty() || !out || out->GetNumberOfPoints() == 0)
-    throw std::runtime_error(path + ": cannot read (" + (errors->last.empty() ? "no points" : errors->last) + ")");
-  try {
-    checkMeshContents(out);
-  } catch (const std::runtime_error& e) {
-    throw std::runtime_error(path + ": " + e.what());
-  }
-  vtkSmartPointer<vtkPointSet> copy;
-  copy.TakeReference(out->NewInstance());
-  copy->ShallowCopy(out);
-  return copy;
-}
-
-/// The array `name` of `data` with `components` components and `tuples` tuples, or an error.
-vtkDataArray* caseArray(vtkFieldData* data, const char* name, int components, vtkIdType tuples,
-                        const std::string& path) {
-  vtkDataArray* a = vtkDataArray::SafeDownCast(data->GetAbstractArray(name));
-  if (!a || a->GetNumberOfComponents() != components || a->GetNumberOfTuples() != tuples)
-    throw std::runtime_error(path + ": array " + name + " is missing or not " + std::to_string(tuples) + " x " +
-                             std::to_string(components) + " (not a prepared case file, or a damaged one)");
-  return a;
-}
-
-std::string shortNumber(double v) {
-  std::ostringstream text;
-  text << v;
-  return text.str();
-}
-
-/// Every value of `a` finite and, when lo <= hi, within [lo, hi].
-void requireValues(vtkDataArray* a, double lo, double hi, const std::string& path) {
-  for (vtkIdType i = 0, n = a->GetNumberOfTuples(); i < n; ++i)
-    for (int c = 0; c < a->GetNumberOfComponents(); ++c) {
-      const double v = a->GetComponent(i, c);
-      if (!std::isfinite(v) || (lo <= hi && (v < lo || v > hi)))
-        throw std::runtime_error(path + ": array " + a->GetName() + " holds " + shortNumber(v) + " at tuple " +
-                                 std::to_string(i) + (lo <= hi ? " (expected " + std::to_string(int(lo)) + ".." +
-                                                                     std::to_string(int(hi)) + ")"
-                                                               : std::string(" (not finite)")));
-    }
-}
-
-vtkSmartPointer<vtkUnstructuredGrid> readCaseMesh(const std::string& path, const Json::Value& manifest,
-                                                  const std::string& manifestPath, const Skeleton& skeleton) {
-  auto mesh = vtkSmartPointer<vtkUnstructuredGrid>::New();
-  mesh->ShallowCopy(readXmlMesh<vtkXMLUnstructuredGridReader>(path));
-  if (!manifest["nodes"].isIntegral() || manifest["nodes"].asLargestInt() != mesh->GetNumberOfPoints() ||
-      !manifest["tets"].isIntegral() || manifest["tets"].asLargestInt() != mesh->GetNumberOfCells())
-    throw std::runtime_error(manifestPath + ": says " + brief(manifest["nodes"]) +
-                             " nodes and " + brief(manifest["tets"]) + " tets, " + path +
-                             " has " + std::to_string(mesh->GetNumberOfPoints()) + " and " +
-                             std::to_string(mesh->GetNumberOfCells()));
-  for (vtkIdType c = 0, n = mesh->GetNumberOfCells(); c < n; ++c)
-    if (mesh->GetCellType(c) != VTK_TETRA)
-      throw std::runtime_error(path + ": cell " + std::to_string(c) + " is not a tetrahedron");
-  const vtkIdType nodes = mesh->GetNumberOfPoints();
-  vtkDataArray* weights = vtkDataArray::SafeDownCast(mesh->GetPointData()->GetAbstractArray(repose::arrays::kWeights));
-  const int influences = weights ? weights->GetNumberOfComponents() : 1;
-  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kWeights, influences, nodes, path), 0, -1, path);
-  const double lastBone = double(skeleton.joints.size()) - 1;
-  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kBoneIds, influences, nodes, path), 0, lastBone, path);
-  requireValues(caseArray(mesh->GetPointData(), repose::arrays::kFixedBone, 1, nodes, path), -1, lastBone, path);
-  return mesh;
-}
-
-vtkSmartPointer<vtkPolyData> readCaseSurfaces(const std::string& path, vtkIdType tets) {
-  auto surfaces = vtkSmartPointer<vtkPolyData>::New();
-  surfaces->ShallowCopy(readXmlMesh<vtkXMLPolyDataReader>(path));
-  const vtkIdType n = surfaces->GetNumberOfPoints();
-  requireValues(caseArray(surfaces->GetPointData(), repose::arrays::kBoundTet, 1, n, path), 0, double(tets) - 1, path);
-  requireValues(caseArray(surfaces->GetPointData(), repose::arrays::kBoundWeights, 4, n, path), 0, -1, path);
-  if (!vtkIntArray::SafeDownCast(surfaces->GetPointData()->GetArray(repose::arrays::kBoundTet)) ||
-      !vtkFloatArray::SafeDownCast(surfaces->GetPointData()->GetArray(repose::arrays::kBoundWeights)))
-    throw std::runtime_error(path + ": BoundTet must be int32 and BoundWeights float32");
-  return surfaces;
-}
-
-/// The tet mesh was made from the label volume: its nodes lie within the volume's box, give or take
-/// the meshing grid's coarser voxels (a quarter of the box, and three voxels, of margin). A case
-/// whose labels lie elsewhere than its mesh (another scan's, or a moved grid) is refused.
-void checkMeshOnGrid(vtkPointSet* mesh, const std::string& meshPath, vtkImageData* labels,
-                     const std::string& labelsPath) {
-  int dims[3];
-  double spacing[3];
-  labels->GetDimensions(dims);
-  labels->GetSpacing(spacing);
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (int corner = 0; corner < 8; ++corner) {
-    const double ijk[3] = {corner & 1 ? dims[0] - 1.0 : 0.0, corner & 2 ? dims[1] - 1.0 : 0.0,
-                           corner & 4 ? dims[2] - 1.0 : 0.0};
-    double xyz[3];
-    labels->TransformContinuousIndexToPhysicalPoint(ijk, xyz);
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], xyz[a]), hi[a] = std::max(hi[a], xyz[a]);
-  }
-  const double margin = 0.25 * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) +
-                        3 * std::max({spacing[0], spacing[1], spacing[2]});
-  double b[6];
-  mesh->GetBounds(b);
-  for (int a = 0; a < 3; ++a)
-    if (b[2 * a] < lo[a] - margin || b[2 * a + 1] > hi[a] + margin)
-      throw std::runtime_error(labelsPath + ": its grid (" + describeGrid(labels) + ") does not hold " + meshPath +
-                               " (the case's labels and mesh come from different scans)");
-}
 }  // namespace
-
-vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path) {
-  // A folder would be read as a DICOM CT series and its outputs written as one: labels are files.
-  if (std::filesystem::is_directory(path))
-    throw std::runtime_error(path + ": a folder; label volumes are read from files (NIfTI, NRRD, MetaImage)");
-  vtkSmartPointer<vtkImageData> image = readImageFile(path);
-  vtkDataArray* scalars = image->GetPointData()->GetScalars();
-  if (scalars->GetNumberOfComponents() != 1)
-    throw std::runtime_error(path + ": label volume must have one component per voxel, not " +
-                             std::to_string(scalars->GetNumberOfComponents()));
-  if (scalars->GetDataType() != VTK_INT) {
-    // Float files holding whole numbers are common for label maps; anything else is not a label map.
-    const vtkIdType n = scalars->GetNumberOfTuples();
-    auto labels = vtkSmartPointer<vtkIntArray>::New();
-    labels->SetName(repose::arrays::kLabels);
-    labels->SetNumberOfTuples(n);
-    for (vtkIdType i = 0; i < n; ++i) {
-      const double v = scalars->GetTuple1(i);
-      if (!std::isfinite(v) || v != std::floor(v) || std::fabs(v) > 2147483647.0)
-        throw std::runtime_error(path + ": not a label volume (voxel value " + std::to_string(v) +
-                                 " is not an integer)");
-      labels->SetValue(i, static_cast<int>(v));
-    }
-    image->GetPointData()->SetScalars(labels);
-  }
-  vtkIntArray* labels = vtkIntArray::SafeDownCast(image->GetPointData()->GetScalars());
-  labels->SetName(repose::arrays::kLabels);
-  // Tables indexed by label value are sized by the largest label: bound it before anyone allocates.
-  bool any = false;
-  for (vtkIdType i = 0, n = labels->GetNumberOfTuples(); i < n; ++i) {
-    const int v = labels->GetValue(i);
-    if (v < 0 || v > kMaxLabelValue)
-      throw std::runtime_error(path + ": label " + std::to_string(v) + " is outside 0.." +
-                               std::to_string(kMaxLabelValue) + " (not a label volume, or a damaged one)");
-    any = any || v != 0;
-  }
-  if (!any) throw std::runtime_error(path + ": empty label volume (every voxel is 0)");
-  return image;
-}
-
-vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path, const std::string& seriesUid) {
-  vtkSmartPointer<vtkImageData> image = readImageFile(path, seriesUid);
-  if (image->GetPointData()->GetScalars()->GetNumberOfComponents() != 1)
-    throw std::runtime_error(path + ": image must have one component per voxel");
-  return image;
-}
-
-namespace {
-void writeImageAs(vtkImageData* image, const std::string& path, bool smallestIntegerType) {
-  const QuietStderr quiet;
-  auto writer = vtkSmartPointer<vtkReposeImageWriter>::New();
-  writer->SetFileName(path.c_str());
-  writer->SetSmallestIntegerType(smallestIntegerType);
-  writer->SetInputData(image);
-  if (!writer->Write()) {
-    const char* err = writer->GetLastError();
-    throw std::runtime_error(err && *err ? std::string(err) : path + ": cannot write image");
-  }
-}
-}  // namespace
-
-void writeImage(vtkImageData* image, const std::string& path) {
-  if (!path.empty() && path.back() == '/') {  // a DICOM CT series, as the input was
-    const QuietStderr quiet;
-    auto writer = vtkSmartPointer<vtkReposeDicomSeriesWriter>::New();
-    writer->SetFileName(path.substr(0, path.size() - 1).c_str());
-    writer->SetSeriesDescription("Reposed (Repose " REPOSE_VERSION ")");
-    writer->SetInputData(image);
-    if (!writer->Write()) throw std::runtime_error(writer->GetLastError());
-    return;
-  }
-  writeImageAs(image, path, false);
-}
-
-void writeLabelImage(vtkImageData* labels, const std::string& path) { writeImageAs(labels, path, true); }
-
-void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path) {
-  auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
-  writer->SetFileName(path.c_str());
-  writer->SetInputData(withVersion(mesh));
-  writer->SetDataModeToAppended();
-  writer->EncodeAppendedDataOff();
-  writeChecked(writer.Get(), path, kVtkXmlTail);
-}
-
-void writeSurfaces(vtkPolyData* surfaces, const std::string& path) {
-  auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
-  writer->SetFileName(path.c_str());
-  writer->SetInputData(withVersion(surfaces));
-  writer->SetDataModeToAppended();
-  writer->EncodeAppendedDataOff();
-  writeChecked(writer.Get(), path, kVtkXmlTail);
-}
-
-void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
-                   const std::string& imageName) {
-  int dl[3], di[3];
-  double ol[3], oi[3], sl[3], si[3];
-  labels->GetDimensions(dl);
-  image->GetDimensions(di);
-  labels->GetOrigin(ol);
-  image->GetOrigin(oi);
-  labels->GetSpacing(sl);
-  image->GetSpacing(si);
-  bool same = dl[0] == di[0] && dl[1] == di[1] && dl[2] == di[2];
-  for (int a = 0; a < 3 && same; ++a)
-    same = std::fabs(ol[a] - oi[a]) <= 1e-4 * std::max(1.0, std::fabs(sl[a])) &&
-           std::fabs(sl[a] - si[a]) <= 1e-6 * std::fabs(sl[a]);
-  for (int r = 0; r < 3 && same; ++r)
-    for (int c = 0; c < 3 && same; ++c)
-      same = std::fabs(labels->GetDirectionMatrix()->GetElement(r, c) -
-                       image->GetDirectionMatrix()->GetElement(r, c)) <= 1e-6;
-  if (!same)
-    throw std::runtime_error(imageName + " and " + labelsName + " are on different grids (" +
-                             describeGrid(image) + " vs " + describeGrid(labels) + ")");
-}
-
-std::optional<std::string> updateFilter(vtkAlgorithm* filter) {
-  auto capture = vtkSmartPointer<ErrorCapture>::New();
-  const unsigned long tag = filter->AddObserver(vtkCommand::ErrorEvent, capture);
-  const int ok = filter->GetExecutive()->Update();
-  filter->RemoveObserver(tag);
-  if (ok && capture->last.empty()) return std::nullopt;
-  return capture->last;
-}
-
-void updateOrThrow(vtkAlgorithm* filter, const std::string& what) {
-  if (const auto error = updateFilter(filter))
-    throw std::runtime_error(what + " failed" + (error->empty() ? std::string() : ": " + *error));
-}
-
-void updateOrThrowFor(vtkAlgorithm* filter, const std::string& file, const std::string& what) {
-  if (const auto error = updateFilter(filter))
-    throw std::runtime_error(file + ": " + what + (error->empty() ? std::string(" failed") : " (" + *error + ")"));
-}
 
 Pipeline::Pipeline() = default;
 Pipeline::~Pipeline() = default;

@@ -15,6 +15,8 @@
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 
+#include "filter_errors.h"
+#include "scan_files.h"
 #include "vtkReposeCorotationalRelax.h"  // its enums name the relaxation settings
 
 class vtkAlgorithm;
@@ -48,31 +50,6 @@ struct StageTime {
   std::string stage;
   double seconds;
 };
-
-/// Largest label value accepted: label-indexed tables stay small whatever a damaged file claims.
-constexpr int kMaxLabelValue = 1000000;
-
-/// Reads a label volume; float files holding whole numbers are accepted. Throws std::runtime_error
-/// "FILE: problem" (unreadable, not integer, negative or above kMaxLabelValue, empty).
-vtkSmartPointer<vtkImageData> readLabelVolume(const std::string& path);
-/// Reads an intensity image (CT/MRI) as float.
-vtkSmartPointer<vtkImageData> readIntensityImage(const std::string& path, const std::string& seriesUid = "");
-/// Writes an image, format from the extension; throws std::runtime_error naming the file.
-void writeImage(vtkImageData* image, const std::string& path);
-/// writeImage for label volumes: written in the smallest integer type that holds the labels
-/// (vtkReposeImageWriter::SmallestIntegerType), e.g. unsigned char for up to 255.
-void writeLabelImage(vtkImageData* labels, const std::string& path);
-void writeMesh(vtkUnstructuredGrid* mesh, const std::string& path);
-void writeSurfaces(vtkPolyData* surfaces, const std::string& path);
-/// Runs a VTK filter: nothing when it ran, its own error message ("" when it gave none) when it failed.
-std::optional<std::string> updateFilter(vtkAlgorithm* filter);
-/// Runs a VTK filter; throws std::runtime_error "`what` failed: <the filter's own error>" on failure.
-void updateOrThrow(vtkAlgorithm* filter, const std::string& what);
-/// Same, for a filter working on one file: throws "FILE: what (<the filter's own error>)".
-void updateOrThrowFor(vtkAlgorithm* filter, const std::string& file, const std::string& what);
-/// Throws std::runtime_error "LABEL_FILE and IMAGE_FILE are on different grids (...)".
-void checkSameGrid(vtkImageData* labels, const std::string& labelsName, vtkImageData* image,
-                   const std::string& imageName);
 
 /// Thrown by Pipeline::prepare when the cancel check returns true (between stages).
 struct Cancelled : std::runtime_error {

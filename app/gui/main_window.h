@@ -135,6 +135,7 @@ protected:
   bool eventFilter(QObject* watched, QEvent* event) override;
 
 private:
+  static constexpr const char* kRelaxButtonText = "Relax soft tissue (FEM)";
   void buildMenus();
   void buildWorkspace();
   void startWorker(const OpenRequest& request);

@@ -181,16 +181,82 @@ std::vector<std::uint8_t> creaseMap(const MaskVolume& body, const Neighbourhood&
 
 // One pass of separateContacts on `body` (cut in place): segments from the body as it is, creases
 // and the sides of each crease from the scan's body.
-ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody, const std::vector<std::uint8_t>& crease,
-                                    const Volume<std::int16_t>& bone, const Skeleton& skeleton,
-                                    const ContactSeparationOptions& options, const Neighbourhood& nbh) {
+// One pass of the contact cut: the stages below share the scan's maps, the nearest bones and the
+// segments, and each reads as the step of the method it is.
+struct ContactCutPass {
+  MaskVolume& body;
+  const MaskVolume& scanBody;
+  const std::vector<std::uint8_t>& crease;
+  const Volume<std::int16_t>& bone;
+  const Skeleton& skeleton;
+  const ContactSeparationOptions& options;
+  const Neighbourhood& nbh;
   const ImageGrid& g = body.grid;
   const std::size_t n = g.voxelCount();
-  ContactSeparationReport report;
-  // Segments: the nearest bone of every body voxel.
+  // Segments: the nearest bone of every body voxel, then moved at each contact.
   const NearestBones nb = nearestBones(body, bone);
-  std::vector<std::int16_t> seg(nb.first);
+  std::vector<std::int16_t> seg = nb.first;
+  std::map<Pair, std::size_t> contactIndex;  // the pair's contact in report.contacts
+  ContactSeparationReport report;
 
+  ContactSeparationReport run();
+  void findContacts();
+  void shiftBoundaries();
+  void reattachDetachedTissue();
+  std::vector<std::int32_t> creasesBetweenParts();
+  std::vector<std::vector<std::size_t>> contactBoundaries() const;
+  std::vector<float> depthInBody() const;
+  bool guarded(const Pair& p, std::size_t v, const std::vector<float>& depth) const;
+  struct Seeds {
+    std::vector<std::size_t> crease, skin;
+  };
+  Seeds sheetSeeds(std::size_t c, const Pair& p, const std::vector<std::size_t>& sheet,
+                   const std::vector<std::int32_t>& creaseContact) const;
+  std::vector<float> alongSheet(const std::vector<std::size_t>& sheet,
+                                const std::unordered_map<std::size_t, std::size_t>& slot,
+                                const std::vector<std::size_t>& seeds) const;
+  void cutSheet(std::size_t c, const std::vector<std::size_t>& sheet, const std::vector<std::int32_t>& creaseContact,
+                const std::vector<float>& depth, const std::vector<std::size_t>& segmentVoxels,
+                std::vector<std::pair<std::size_t, std::size_t>>& cut) const;
+};
+
+ContactSeparationReport ContactCutPass::run() {
+  findContacts();
+  if (report.contacts.empty()) return report;
+  shiftBoundaries();
+  reattachDetachedTissue();
+  const std::vector<std::int32_t> creaseContact = creasesBetweenParts();
+  const std::vector<std::vector<std::size_t>> boundaryOf = contactBoundaries();
+  const std::vector<float> depth = depthInBody();
+  // Which boundary voxels are the contact: those nearer (along the boundary) to where it meets the
+  // outside in a crease between the two parts than to where it meets free skin, by a margin that
+  // keeps the rim's voxel noise (a slit only partly seen as a crease) from cutting it into patches;
+  // not those at the joint between a bone and its parent.
+  std::vector<std::pair<std::size_t, std::size_t>> cut;  // voxel, contact
+  std::vector<std::size_t> segmentVoxels(skeleton.size() + 1, 0);
+  for (std::size_t v = 0; v < n; ++v)
+    if (body.data[v] && seg[v] >= 0 && std::size_t(seg[v]) < skeleton.size()) ++segmentVoxels[seg[v]];
+  for (std::size_t c = 0; c < report.contacts.size(); ++c)
+    cutSheet(c, boundaryOf[c], creaseContact, depth, segmentVoxels, cut);
+  std::sort(cut.begin(), cut.end());
+  cut.erase(std::unique(cut.begin(), cut.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+            cut.end());
+  const double faceArea = g.spacing.prod() / (g.spacing.sum() / 3);
+  for (const auto& [v, contact] : cut) {
+    ContactSeparationReport::Contact& c = report.contacts[contact];
+    ++c.voxelsCut;
+    c.areaMm2 += faceArea;
+    body.data[v] = 0;
+  }
+  report.voxelsCut = cut.size();
+  // Pairs whose creases turned out to lie between other parts, or that needed no cut, are no contacts.
+  report.contacts.erase(std::remove_if(report.contacts.begin(), report.contacts.end(),
+                                       [](const ContactSeparationReport::Contact& c) { return c.voxelsCut == 0; }),
+                        report.contacts.end());
+  return report;
+}
+
+void ContactCutPass::findContacts() {
   // Contacts: the parts on the two sides of each crease voxel, and how much nearer the one's bone is
   // than the other's there: their boundary must pass through the crease. A side's part is its
   // nearest bone; where both sides have the same (a thin part whose tissue is nearer to the thick
@@ -225,7 +291,6 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
       return true;
     });
   }
-  std::map<Pair, std::size_t> contactIndex;
   for (auto& [p, voxels] : creaseOf) {
     if (voxels.size() < options.minCreaseVoxels) continue;
     ContactSeparationReport::Contact c;
@@ -239,8 +304,9 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
     contactIndex[p] = report.contacts.size();
     report.contacts.push_back(c);
   }
-  if (report.contacts.empty()) return report;
+}
 
+void ContactCutPass::shiftBoundaries() {
   // Move each contact's boundary to pass through its crease: where A and B are a voxel's two
   // nearest bones, it joins A when dA - dB is below the shift.
   parallelFor(n, [&](std::size_t b, std::size_t e) {
@@ -254,6 +320,9 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
       seg[v] = std::int16_t(dA - dB < c.offsetMm ? c.boneA : c.boneB);
     }
   }, 4096);
+}
+
+void ContactCutPass::reattachDetachedTissue() {
   // A segment is one piece holding its bone: what the shift detached from it (tissue of the other
   // part across a gap) goes back to its nearest bone.
   {
@@ -271,7 +340,9 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
     for (std::size_t v = 0; v < n; ++v)
       if (body.data[v] && !reached[v]) seg[v] = nb.first[v];
   }
+}
 
+std::vector<std::int32_t> ContactCutPass::creasesBetweenParts() {
   // A crease lies between two parts when the voxels sandwiching it are of two segments: the slit
   // between two knees is a contact of the knees, not of a femur and its own tibia beside it. A bone
   // lies against its parent along its length (an arm against the torso, a forearm folded on the
@@ -302,31 +373,10 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
     report.contacts[c].creaseVoxels = creasesBetween[c];
     if (creasesBetween[c] < options.minCreaseVoxels) report.contacts[c].creaseVoxels = 0;
   }
+  return creaseContact;
+}
 
-  // Which boundary voxels of a contact pair are the contact: those nearer (along the boundary) to
-  // where it meets the outside in a crease between the two than to where it meets other skin.
-  const std::vector<float> depth = [&] {
-    MaskVolume outside;
-    outside.grid = g;
-    outside.data.resize(n);
-    for (std::size_t v = 0; v < n; ++v) outside.data[v] = body.data[v] ? 0 : 1;
-    return distanceToFeatures(outside);
-  }();
-  // Joint guard: a boundary between a bone and its parent stays within the child's depth of its centre.
-  auto guarded = [&](const Pair& p, std::size_t v) {
-    for (int child : {p.first, p.second}) {
-      const int parent = skeleton.joints[child].parent;
-      if (parent != p.first && parent != p.second) continue;
-      const Eigen::Vector3d ijk = g.physicalToIndex(skeleton.joints[child].center).array().round();
-      if (!g.contains(int(ijk[0]), int(ijk[1]), int(ijk[2]))) continue;
-      const float reach = depth[g.linearIndex(int(ijk[0]), int(ijk[1]), int(ijk[2]))];
-      const int nx = g.dims[0], ny = g.dims[1];
-      const Eigen::Vector3d x = g.indexToPhysical(
-          Eigen::Vector3d(double(v % nx), double((v / nx) % ny), double(v / (std::size_t(nx) * ny))));
-      if ((x - skeleton.joints[child].center).norm() < kJointGuard * reach) return true;
-    }
-    return false;
-  };
+std::vector<std::vector<std::size_t>> ContactCutPass::contactBoundaries() const {
   // Each contact's boundary: the voxels of either segment with a 26-neighbour in the other (a voxel
   // where three segments meet lies on two boundaries).
   std::vector<std::vector<std::size_t>> boundaryOf(report.contacts.size());
@@ -344,98 +394,119 @@ ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody
       if (it != contactIndex.end() && report.contacts[it->second].creaseVoxels > 0) boundaryOf[it->second].push_back(v);
     }
   }
+  return boundaryOf;
+}
 
-  // Which boundary voxels are the contact: those nearer (along the boundary) to where it meets the
-  // outside in a crease between the two parts than to where it meets free skin, by a margin that
-  // keeps the rim's voxel noise (a slit only partly seen as a crease) from cutting it into patches;
-  // not those at the joint between a bone and its parent.
+// Each body voxel's distance (mm) to the outside.
+std::vector<float> ContactCutPass::depthInBody() const {
+  MaskVolume outside;
+  outside.grid = g;
+  outside.data.resize(n);
+  for (std::size_t v = 0; v < n; ++v) outside.data[v] = body.data[v] ? 0 : 1;
+  return distanceToFeatures(outside);
+}
+
+// Joint guard: a boundary between a bone and its parent stays within the child's depth of its centre.
+bool ContactCutPass::guarded(const Pair& p, std::size_t v, const std::vector<float>& depth) const {
+  for (int child : {p.first, p.second}) {
+    const int parent = skeleton.joints[child].parent;
+    if (parent != p.first && parent != p.second) continue;
+    const Eigen::Vector3d ijk = g.physicalToIndex(skeleton.joints[child].center).array().round();
+    if (!g.contains(int(ijk[0]), int(ijk[1]), int(ijk[2]))) continue;
+    const float reach = depth[g.linearIndex(int(ijk[0]), int(ijk[1]), int(ijk[2]))];
+    const int nx = g.dims[0], ny = g.dims[1];
+    const Eigen::Vector3d x = g.indexToPhysical(
+        Eigen::Vector3d(double(v % nx), double((v / nx) % ny), double(v / (std::size_t(nx) * ny))));
+    if ((x - skeleton.joints[child].center).norm() < kJointGuard * reach) return true;
+  }
+  return false;
+}
+
+// Seeds of the walk along contact c's boundary `sheet`: beside a crease between the two parts, and
+// beside free skin.
+ContactCutPass::Seeds ContactCutPass::sheetSeeds(std::size_t c, const Pair& p, const std::vector<std::size_t>& sheet,
+                                                 const std::vector<std::int32_t>& creaseContact) const {
+  Seeds seeds;
+  for (std::size_t v : sheet) {
+    // A voxel cut by an earlier pass (body in the scan, background now) is a contact continued.
+    std::uint8_t k = 0;
+    nbh.forEach(v, [&](std::size_t w, float) {
+      if (body.data[w]) return;
+      if (creaseContact[w] == std::int32_t(c) || scanBody.data[w]) k = 1;
+      else if (crease[w] == 2 && k == 0) k = 2;
+    });
+    // Skin that faces the other part across a gap (where the two part for a moment between two
+    // stretches of contact) is not free: it does not keep the boundary.
+    if (k == 2) {
+      bool facesOther = false;
+      nbh.forEach(v, [&](std::size_t w, float) {
+        if (body.data[w] || facesOther) return;
+        sandwichSides(body, w, kGapReach * options.creaseReach, [&](std::size_t w1, std::size_t w2, const Eigen::Vector3d&) {
+          facesOther = makePair(seg[w1], seg[w2]) == p;
+          return facesOther;
+        });
+      });
+      if (facesOther) k = 0;
+    }
+    if (k == 1) seeds.crease.push_back(v);
+    if (k == 2) seeds.skin.push_back(v);
+  }
+  return seeds;
+}
+
+// Distance (mm) along the sheet from the nearest seed; infinite where no seed is reached.
+std::vector<float> ContactCutPass::alongSheet(const std::vector<std::size_t>& sheet,
+                                              const std::unordered_map<std::size_t, std::size_t>& slot,
+                                              const std::vector<std::size_t>& seeds) const {
+  std::vector<float> dist(sheet.size(), std::numeric_limits<float>::infinity());
+  using Entry = std::pair<float, std::size_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  for (std::size_t v : seeds) dist[slot.at(v)] = 0.f, queue.emplace(0.f, slot.at(v));
+  while (!queue.empty()) {
+    const auto [d, s] = queue.top();
+    queue.pop();
+    if (dist[s] != d) continue;
+    nbh.forEach(sheet[s], [&](std::size_t w, float mm) {
+      const auto it = slot.find(w);
+      if (it == slot.end() || dist[it->second] <= d + mm) return;
+      dist[it->second] = d + mm;
+      queue.emplace(d + mm, it->second);
+    });
+  }
+  return dist;
+}
+
+void ContactCutPass::cutSheet(std::size_t c, const std::vector<std::size_t>& sheet,
+                              const std::vector<std::int32_t>& creaseContact, const std::vector<float>& depth,
+                              const std::vector<std::size_t>& segmentVoxels,
+                              std::vector<std::pair<std::size_t, std::size_t>>& cut) const {
+  if (sheet.empty()) return;
   const float margin = float(kMargin * g.spacing.mean());
-  std::vector<std::pair<std::size_t, std::size_t>> cut;  // voxel, contact
-  std::vector<std::size_t> segmentVoxels(skeleton.size() + 1, 0);
-  for (std::size_t v = 0; v < n; ++v)
-    if (body.data[v] && seg[v] >= 0 && std::size_t(seg[v]) < skeleton.size()) ++segmentVoxels[seg[v]];
-  for (std::size_t c = 0; c < report.contacts.size(); ++c) {
-    const std::vector<std::size_t>& sheet = boundaryOf[c];
-    if (sheet.empty()) continue;
-    const Pair p{report.contacts[c].boneA, report.contacts[c].boneB};
-    std::unordered_map<std::size_t, std::size_t> slot;
-    for (std::size_t s = 0; s < sheet.size(); ++s) slot[sheet[s]] = s;
-    // Seeds: beside a crease between the two (1), beside free skin (2).
-    std::vector<std::size_t> creaseSeeds, skinSeeds;
-    for (std::size_t v : sheet) {
-      // A voxel cut by an earlier pass (body in the scan, background now) is a contact continued.
-      std::uint8_t k = 0;
-      nbh.forEach(v, [&](std::size_t w, float) {
-        if (body.data[w]) return;
-        if (creaseContact[w] == std::int32_t(c) || scanBody.data[w]) k = 1;
-        else if (crease[w] == 2 && k == 0) k = 2;
-      });
-      // Skin that faces the other part across a gap (where the two part for a moment between two
-      // stretches of contact) is not free: it does not keep the boundary.
-      if (k == 2) {
-        bool facesOther = false;
-        nbh.forEach(v, [&](std::size_t w, float) {
-          if (body.data[w] || facesOther) return;
-          sandwichSides(body, w, kGapReach * options.creaseReach, [&](std::size_t w1, std::size_t w2, const Eigen::Vector3d&) {
-            facesOther = makePair(seg[w1], seg[w2]) == p;
-            return facesOther;
-          });
-        });
-        if (facesOther) k = 0;
-      }
-      if (k == 1) creaseSeeds.push_back(v);
-      if (k == 2) skinSeeds.push_back(v);
+  const Pair p{report.contacts[c].boneA, report.contacts[c].boneB};
+  std::unordered_map<std::size_t, std::size_t> slot;
+  for (std::size_t s = 0; s < sheet.size(); ++s) slot[sheet[s]] = s;
+  const Seeds seeds = sheetSeeds(c, p, sheet, creaseContact);
+  const std::vector<float> toCrease = alongSheet(sheet, slot, seeds.crease), toSkin = alongSheet(sheet, slot, seeds.skin);
+  const int larger = segmentVoxels[p.first] > segmentVoxels[p.second] ? p.first : p.second;
+  for (std::size_t s = 0; s < sheet.size(); ++s) {
+    const std::size_t v = sheet[s];
+    const bool contact = std::isfinite(toCrease[s]) && !(toSkin[s] + margin < toCrease[s]) && !guarded(p, v, depth);
+    if (!contact) continue;
+    // Cut on the larger segment's side: the voxel itself, or its neighbours there.
+    if (seg[v] == larger) {
+      if (bone.data[v] < 0) cut.emplace_back(v, c);
+      continue;
     }
-    auto alongSheet = [&](const std::vector<std::size_t>& seeds) {
-      std::vector<float> dist(sheet.size(), std::numeric_limits<float>::infinity());
-      using Entry = std::pair<float, std::size_t>;
-      std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-      for (std::size_t v : seeds) dist[slot[v]] = 0.f, queue.emplace(0.f, slot[v]);
-      while (!queue.empty()) {
-        const auto [d, s] = queue.top();
-        queue.pop();
-        if (dist[s] != d) continue;
-        nbh.forEach(sheet[s], [&](std::size_t w, float mm) {
-          const auto it = slot.find(w);
-          if (it == slot.end() || dist[it->second] <= d + mm) return;
-          dist[it->second] = d + mm;
-          queue.emplace(d + mm, it->second);
-        });
-      }
-      return dist;
-    };
-    const std::vector<float> toCrease = alongSheet(creaseSeeds), toSkin = alongSheet(skinSeeds);
-    const int larger = segmentVoxels[p.first] > segmentVoxels[p.second] ? p.first : p.second;
-    for (std::size_t s = 0; s < sheet.size(); ++s) {
-      const std::size_t v = sheet[s];
-      const bool contact = std::isfinite(toCrease[s]) && !(toSkin[s] + margin < toCrease[s]) && !guarded(p, v);
-      if (!contact) continue;
-      // Cut on the larger segment's side: the voxel itself, or its neighbours there.
-      if (seg[v] == larger) {
-        if (bone.data[v] < 0) cut.emplace_back(v, c);
-        continue;
-      }
-      nbh.forEach(v, [&](std::size_t w, float) {
-        if (body.data[w] && seg[w] == larger && bone.data[w] < 0) cut.emplace_back(w, c);
-      });
-    }
+    nbh.forEach(v, [&](std::size_t w, float) {
+      if (body.data[w] && seg[w] == larger && bone.data[w] < 0) cut.emplace_back(w, c);
+    });
   }
-  std::sort(cut.begin(), cut.end());
-  cut.erase(std::unique(cut.begin(), cut.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
-            cut.end());
-  const double faceArea = g.spacing.prod() / (g.spacing.sum() / 3);
-  for (const auto& [v, contact] : cut) {
-    ContactSeparationReport::Contact& c = report.contacts[contact];
-    ++c.voxelsCut;
-    c.areaMm2 += faceArea;
-    body.data[v] = 0;
-  }
-  report.voxelsCut = cut.size();
-  // Pairs whose creases turned out to lie between other parts, or that needed no cut, are no contacts.
-  report.contacts.erase(std::remove_if(report.contacts.begin(), report.contacts.end(),
-                                       [](const ContactSeparationReport::Contact& c) { return c.voxelsCut == 0; }),
-                        report.contacts.end());
-  return report;
+}
+
+ContactSeparationReport cutContacts(MaskVolume& body, const MaskVolume& scanBody, const std::vector<std::uint8_t>& crease,
+                                    const Volume<std::int16_t>& bone, const Skeleton& skeleton,
+                                    const ContactSeparationOptions& options, const Neighbourhood& nbh) {
+  return ContactCutPass{body, scanBody, crease, bone, skeleton, options, nbh}.run();
 }
 
 }  // namespace
