@@ -23,16 +23,17 @@ struct Setting {
   std::vector<std::pair<const char*, int>> words;
 };
 
-const Setting kModel{"relax-model", "fixed-corotated", {{"fixed-corotated", Relax::MODEL_FIXED_COROTATED}, {"linear", Relax::MODEL_LINEAR}}};
-const Setting kVolume{"relax-volume", "segments",
-                      {{"tissues", Relax::VOLUME_TISSUES},
-                       {"segments", Relax::VOLUME_SEGMENTS},
-                       {"body", Relax::VOLUME_BODY},
-                       {"none", Relax::VOLUME_NONE}}};
-const Setting kContinuation{"relax-continuation", "if-inverted",
-                            {{"if-inverted", Relax::CONTINUATION_IF_INVERTED},
-                             {"never", Relax::CONTINUATION_NEVER},
-                             {"always", Relax::CONTINUATION_ALWAYS}}};
+/// A setting whose words are the relaxation filter's (the one table the batch reads too).
+Setting filterSetting(const char* option, const char* setting, const char* fallback) {
+  Setting s{option, fallback, {}};
+  for (int i = 0; i < Relax::GetNumberOfWords(setting); ++i)
+    s.words.emplace_back(Relax::GetWord(setting, i), Relax::GetWordValue(setting, Relax::GetWord(setting, i)));
+  return s;
+}
+
+const Setting kModel = filterSetting("relax-model", "model", "fixed-corotated");
+const Setting kVolume = filterSetting("relax-volume", "volume", "segments");
+const Setting kContinuation = filterSetting("relax-continuation", "continuation", "if-inverted");
 const Setting kStrainedRegion{"relax-strained-region", "first", {{"first", 1}, {"off", 0}}};
 const Setting kStart{"relax-start", "previous", {{"previous", 1}, {"skinned", 0}}};
 

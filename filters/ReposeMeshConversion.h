@@ -107,6 +107,30 @@ inline repose::Triangles ToTriangleFans(vtkPolyData* surface)
   return F;
 }
 
+/// vtkPoints of the given VTK data type holding P's rows.
+inline vtkSmartPointer<vtkPoints> ToPoints(const repose::Points& P, int dataType)
+{
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataType(dataType);
+  points->SetNumberOfPoints(P.rows());
+  for (vtkIdType v = 0; v < P.rows(); ++v)
+  {
+    points->SetPoint(v, P(v, 0), P(v, 1), P(v, 2));
+  }
+  return points;
+}
+
+/// The first component of every tuple of an array, as ints.
+inline std::vector<int> ToInts(vtkDataArray* array)
+{
+  std::vector<int> values(static_cast<std::size_t>(array->GetNumberOfTuples()));
+  for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i)
+  {
+    values[static_cast<std::size_t>(i)] = static_cast<int>(array->GetTuple1(i));
+  }
+  return values;
+}
+
 } // namespace repose_vtk
 
 #endif

@@ -128,18 +128,73 @@ void vtkReposeBodyMesher::SetIntensityData(vtkImageData* image)
   this->SetInputData(1, image);
 }
 
+struct vtkReposeBodyMesher::Steps
+{
+  static void ResetFigures(vtkReposeBodyMesher* self)
+  {
+    self->NumberOfNodes = self->NumberOfTets = self->NumberOfSurfaceTriangles = 0;
+    self->NumberOfSeedPoints = self->NumberOfFixedNodes = self->NumberOfFreedContactNodes = 0;
+    self->NumberOfContactVoxelsCut = 0;
+    self->MeshingSpacingUsed = 0;
+    self->ContactReport.clear();
+    self->TotalSeconds = self->TetGenSeconds = 0;
+    self->Report.clear();
+  }
+
+  static void CopyFigures(vtkReposeBodyMesher* self, const repose::BodyMeshing& meshed)
+  {
+    self->MeshingSpacingUsed = meshed.meshingSpacingMm;
+    self->NumberOfContactVoxelsCut = static_cast<vtkIdType>(meshed.contactVoxelsCut);
+    self->ContactReport = meshed.contactReport;
+    self->NumberOfSeedPoints = static_cast<vtkIdType>(meshed.seedPoints);
+    self->NumberOfSurfaceTriangles = static_cast<vtkIdType>(meshed.surfaceTriangles);
+    self->NumberOfFixedNodes = static_cast<vtkIdType>(meshed.fixedNodes);
+    self->NumberOfFreedContactNodes = static_cast<vtkIdType>(meshed.freedContactNodes);
+    self->TetGenSeconds = meshed.tetgenSeconds;
+    self->NumberOfNodes = meshed.mesh.nodes.rows();
+    self->NumberOfTets = meshed.mesh.tets.rows();
+  }
+
+  static repose::BodyMeshingOptions Options(const vtkReposeBodyMesher* self)
+  {
+    repose::BodyMeshingOptions options;
+    options.mask.body.bodyThreshold = self->BodyThreshold;
+    options.mask.meshSpacingMm = self->MeshingSpacing;
+    options.mask.maxTets = static_cast<double>(self->MaxTets);
+    options.mask.skinLabels = self->SkinLabels;
+    options.mask.peelOuterLayer = self->PeelOuterLayer;
+    options.mask.separateContacts = self->SeparateContacts;
+    options.tets.radiusEdgeRatio = self->RadiusEdgeRatio;
+    options.tets.maxTetVolume = self->MaxTetVolume;
+    options.surfaceReduction = self->SurfaceReduction;
+    options.seedSurfaceStep = self->SeedSurfaceStep;
+    options.seedInteriorStep = self->SeedInteriorStep;
+    return options;
+  }
+
+  /// The surface is VTK's: contoured, smoothed and decimated by vtkReposeSurfaceExtractor.
+  static auto SurfaceExtraction(int smoothing)
+  {
+    return [smoothing](const repose::MaskVolume& body, double reduction, repose::Points& V, repose::Triangles& F) {
+      vtkNew<vtkPolyData> surface;
+      if (!vtkReposeSurfaceExtractor::ContourMask(repose_vtk::ToImage(body), 0, smoothing, 0.1, reduction, surface))
+      {
+        return false;
+      }
+      if (!ToTriangles(surface, V, F))
+      {
+        throw std::invalid_argument("the body surface has non-triangle cells");
+      }
+      return true;
+    };
+  }
+};
+
 int vtkReposeBodyMesher::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   const auto start = Clock::now();
-  this->NumberOfNodes = this->NumberOfTets = this->NumberOfSurfaceTriangles = 0;
-  this->NumberOfSeedPoints = this->NumberOfFixedNodes = this->NumberOfFreedContactNodes = 0;
-  this->NumberOfContactVoxelsCut = 0;
-  this->MeshingSpacingUsed = 0;
-  this->ContactReport.clear();
-  this->TotalSeconds = this->TetGenSeconds = 0;
-  this->Report.clear();
-
+  Steps::ResetFigures(this);
   vtkImageData* labelImage = vtkImageData::GetData(inputVector[0]);
   vtkImageData* intensityImage =
     inputVector[1]->GetNumberOfInformationObjects() > 0 ? vtkImageData::GetData(inputVector[1]) : nullptr;
@@ -156,19 +211,6 @@ int vtkReposeBodyMesher::RequestData(
   }
   std::ostringstream report;
   repose::BodyMeshing meshed;
-  auto copyFigures = [this, &meshed]()
-  {
-    this->MeshingSpacingUsed = meshed.meshingSpacingMm;
-    this->NumberOfContactVoxelsCut = static_cast<vtkIdType>(meshed.contactVoxelsCut);
-    this->ContactReport = meshed.contactReport;
-    this->NumberOfSeedPoints = static_cast<vtkIdType>(meshed.seedPoints);
-    this->NumberOfSurfaceTriangles = static_cast<vtkIdType>(meshed.surfaceTriangles);
-    this->NumberOfFixedNodes = static_cast<vtkIdType>(meshed.fixedNodes);
-    this->NumberOfFreedContactNodes = static_cast<vtkIdType>(meshed.freedContactNodes);
-    this->TetGenSeconds = meshed.tetgenSeconds;
-    this->NumberOfNodes = meshed.mesh.nodes.rows();
-    this->NumberOfTets = meshed.mesh.tets.rows();
-  };
   try
   {
     const auto t = Clock::now();
@@ -189,47 +231,20 @@ int vtkReposeBodyMesher::RequestData(
            << " voxels, spacing " << labels.grid.spacing.transpose() << " mm, " << skeleton.size()
            << " joints" << (intensityImage ? ", with intensity image" : "") << " (" << SecondsSince(t)
            << " s)\n";
-
-    repose::BodyMeshingOptions options;
-    options.mask.body.bodyThreshold = this->BodyThreshold;
-    options.mask.meshSpacingMm = this->MeshingSpacing;
-    options.mask.maxTets = static_cast<double>(this->MaxTets);
-    options.mask.skinLabels = this->SkinLabels;
-    options.mask.peelOuterLayer = this->PeelOuterLayer;
-    options.mask.separateContacts = this->SeparateContacts;
-    options.tets.radiusEdgeRatio = this->RadiusEdgeRatio;
-    options.tets.maxTetVolume = this->MaxTetVolume;
-    options.surfaceReduction = this->SurfaceReduction;
-    options.seedSurfaceStep = this->SeedSurfaceStep;
-    options.seedInteriorStep = this->SeedInteriorStep;
-    // The surface is VTK's: contoured, smoothed and decimated by vtkReposeSurfaceExtractor.
-    const int smoothing = this->SurfaceSmoothingIterations;
-    auto extractSurface = [smoothing](
-                            const repose::MaskVolume& body, double reduction, repose::Points& V, repose::Triangles& F) {
-      vtkNew<vtkPolyData> surface;
-      if (!vtkReposeSurfaceExtractor::ContourMask(repose_vtk::ToImage(body), 0, smoothing, 0.1, reduction, surface))
-      {
-        return false;
-      }
-      if (!ToTriangles(surface, V, F))
-      {
-        throw std::invalid_argument("the body surface has non-triangle cells");
-      }
-      return true;
-    };
     auto progress = [this](const std::string& text)
     {
       this->SetProgressText(text.c_str());
       this->UpdateProgress(0.3);
       this->SetProgressText(nullptr); // said once
     };
-    repose::meshBody(labels, intensityImage ? &intensity : nullptr, skeleton, options, extractSurface, progress, meshed);
+    repose::meshBody(labels, intensityImage ? &intensity : nullptr, skeleton, Steps::Options(this),
+      Steps::SurfaceExtraction(this->SurfaceSmoothingIterations), progress, meshed);
     report << meshed.report;
     for (const std::string& warning : meshed.warnings)
     {
       vtkWarningMacro(<< warning);
     }
-    copyFigures();
+    Steps::CopyFigures(this, meshed);
     ToTetGrid(meshed.mesh, output);
     this->TotalSeconds = SecondsSince(start);
     report << "output: " << this->NumberOfNodes << " nodes, " << this->NumberOfTets << " tets; total "
@@ -238,7 +253,7 @@ int vtkReposeBodyMesher::RequestData(
   }
   catch (const std::exception& e)
   {
-    copyFigures();
+    Steps::CopyFigures(this, meshed);
     this->Report = report.str() + meshed.report + "error: " + e.what() + "\n";
     vtkErrorMacro(<< e.what());
     return 0;

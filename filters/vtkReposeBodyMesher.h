@@ -147,6 +147,8 @@ protected:
   std::string Report;
 
 private:
+  struct Steps; // the core's options and figures, and the surface extraction it calls back
+
   vtkReposeBodyMesher(const vtkReposeBodyMesher&) = delete;
   void operator=(const vtkReposeBodyMesher&) = delete;
 };

@@ -1,7 +1,8 @@
 #include "vtkReposeCorotationalRelax.h"
 
-#include <chrono>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -13,17 +14,19 @@
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
+#include "vtkSmartPointer.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <exception>
 
 #include "ReposeMeshConversion.h"
 #include "ReposeWeightArrays.h"
-#include "body_segments.h"
-#include "corotational_fem.h"
-#include "progress_line.h"
-#include "skeleton.h"
 #include "array_names.h"
+#include "corotational_fem.h"
+#include "relaxation_progress_text.h"
+#include "relaxation_words.h"
+#include "skeleton.h"
+#include "skinned_relaxation.h"
 
 vtkStandardNewMacro(vtkReposeCorotationalRelax);
 
@@ -46,7 +49,19 @@ static_assert(SameValue(Relax::MODEL_LINEAR, Core::Linear) &&
 static_assert(SameValue(Relax::CONTINUATION_NEVER, Core::Never) &&
   SameValue(Relax::CONTINUATION_IF_INVERTED, Core::IfInverted) &&
   SameValue(Relax::CONTINUATION_ALWAYS, Core::Always));
+using Regions = repose::VolumeRegionChoice;
+static_assert(SameValue(Relax::VOLUME_NONE, int(Regions::None)) &&
+  SameValue(Relax::VOLUME_BODY, int(Regions::Body)) &&
+  SameValue(Relax::VOLUME_SEGMENTS, int(Regions::Segments)) &&
+  SameValue(Relax::VOLUME_TISSUES, int(Regions::Tissues)));
 }
+
+struct vtkReposeCorotationalRelax::Internals
+{
+  repose::RelaxationWarmStart WarmStart; // the last run's correction
+  static repose::CorotationalOptions Options(vtkReposeCorotationalRelax* self);
+  static void StoreReport(vtkReposeCorotationalRelax* self, const repose::CorotationalReport& report);
+};
 
 vtkReposeCorotationalRelax::vtkReposeCorotationalRelax()
 {
@@ -69,10 +84,12 @@ vtkReposeCorotationalRelax::vtkReposeCorotationalRelax()
   this->StrainedRegionThreshold = defaults.strainedRegionThreshold;
   this->StrainedRegionRings = defaults.strainedRegionRings;
   this->Continuation = defaults.continuation;
+  this->Internal = new Internals;
 }
 
 vtkReposeCorotationalRelax::~vtkReposeCorotationalRelax()
 {
+  delete this->Internal;
   this->SetSkeletonJSON(nullptr);
 }
 
@@ -81,6 +98,113 @@ int vtkReposeCorotationalRelax::FillInputPortInformation(int port, vtkInformatio
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
   (void)port;
   return 1;
+}
+
+namespace
+{
+/// The rest mesh as the core reads it. Throws std::invalid_argument for a cell that is not a tet.
+repose::RelaxationRestMesh ToRestMesh(vtkUnstructuredGrid* rest, vtkDataArray* fixed, bool needWeights,
+  repose::SparseWeights& weights)
+{
+  repose::RelaxationRestMesh mesh;
+  const vtkIdType nt = rest->GetNumberOfCells();
+  mesh.tets.resize(nt, 4);
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < nt; ++c)
+  {
+    rest->GetCellPoints(c, ids);
+    if (ids->GetNumberOfIds() != 4)
+    {
+      throw std::invalid_argument("cell " + std::to_string(c) + " of the rest mesh is not a tetrahedron");
+    }
+    for (int k = 0; k < 4; ++k)
+    {
+      mesh.tets(c, k) = static_cast<int>(ids->GetId(k));
+    }
+  }
+  mesh.fixedBone = repose_vtk::ToInts(fixed);
+  mesh.nodes = repose_vtk::ToPoints(rest->GetPoints());
+  if (needWeights && repose_vtk::HasWeightArrays(rest->GetPointData()))
+  {
+    weights = repose_vtk::ToSparseWeights(rest->GetPointData(), rest->GetNumberOfPoints());
+    mesh.weights = &weights;
+  }
+  vtkDataArray* labels = rest->GetCellData()->GetArray(repose::arrays::kLabel);
+  if (labels && labels->GetNumberOfTuples() == nt)
+  {
+    mesh.tetLabels = repose_vtk::ToInts(labels);
+  }
+  mesh.key = rest->GetMTime();
+  return mesh;
+}
+}
+
+repose::CorotationalOptions vtkReposeCorotationalRelax::Internals::Options(vtkReposeCorotationalRelax* self)
+{
+  repose::CorotationalOptions options;
+  options.poisson = self->PoissonRatio;
+  options.outerIterations = self->OuterIterations;
+  options.tolerance = self->Tolerance;
+  options.maxCgIterations = self->MaxIterations;
+  options.preconditioner = static_cast<repose::CorotationalOptions::Preconditioner>(self->Preconditioner);
+  options.model = static_cast<repose::CorotationalOptions::Model>(self->Model);
+  options.maxNewtonIterations = self->MaxNewtonIterations;
+  options.stepTolerance = self->StepTolerance;
+  options.energyTolerance = self->EnergyTolerance;
+  options.regionVolumeStiffness = self->RegionVolumeStiffness;
+  options.regionVolumeTolerance = self->RegionVolumeTolerance;
+  options.inversionBarrier = self->InversionBarrier;
+  options.untangleRelaxRings = self->UntangleRelaxRings;
+  options.strainedRegionThreshold = self->StrainedRegionThreshold;
+  options.strainedRegionRings = self->StrainedRegionRings;
+  options.continuation = static_cast<repose::CorotationalOptions::Continuation>(self->Continuation);
+  if (self->SkeletonJSON && *self->SkeletonJSON)
+  {
+    for (const repose::Joint& joint : repose::parseSkeletonJson(self->SkeletonJSON).joints)
+    {
+      options.boneParents.push_back(joint.parent);
+    }
+  }
+  // Where the solve is, as VTK progress (the fraction is the continuation's path, 0 before it) and
+  // text; an observer may call Cancel() from its ProgressEvent.
+  options.checkpoint = [self, text = repose::RelaxationProgressText()](
+                         const repose::RelaxationProgress& p) mutable {
+    self->SetProgressText(text(p).c_str());
+    self->UpdateProgress(p.phase == repose::RelaxationProgress::Continuation ? p.pathFraction : 0.0);
+    return self->CancelRequested.load();
+  };
+  return options;
+}
+
+void vtkReposeCorotationalRelax::Internals::StoreReport(
+  vtkReposeCorotationalRelax* self, const repose::CorotationalReport& report)
+{
+  self->WarmStarted = report.correctedStart;
+  self->CGIterations = 0;
+  for (int it : report.cgIterations)
+  {
+    self->CGIterations += it;
+  }
+  self->NewtonIterations = report.newtonIterations;
+  self->RelativeResidual = report.relativeResidual.empty() ? 0.0 : report.relativeResidual.back();
+  self->InvertedBefore = report.invertedBefore;
+  self->InvertedAfter = report.invertedAfter;
+  self->InvertedRigidAfter = report.invertedRigid;
+  self->PinchedNodes = report.pinchedNodes;
+  self->PinchedShortfall = report.pinchedShortfall;
+  self->UntangledNodes = report.untangledNodes;
+  self->UntangleNewtonIterations = report.untangleNewtonIterations;
+  self->RegionVolumeUpdates = report.regionVolumeUpdates;
+  self->LastRelaxTime = report.seconds;
+  self->LastAssemblyTime = report.assemblySeconds;
+  self->LastSolveTime = report.solveSeconds;
+  self->LastUntangleTime = report.untangleSeconds;
+  self->ContinuationSteps = report.continuationSteps;
+  self->ContinuationUsed = report.continuationUsed;
+  self->LastContinuationTime = report.continuationSeconds;
+  self->StrainedRegionNodes = report.strainedRegionNodes;
+  self->StrainedRegionNewtonIterations = report.strainedRegionNewtonIterations;
+  self->LastStrainedRegionTime = report.strainedRegionSeconds;
 }
 
 int vtkReposeCorotationalRelax::RequestData(
@@ -104,171 +228,19 @@ int vtkReposeCorotationalRelax::RequestData(
   }
   try
   {
-    const vtkIdType nt = rest->GetNumberOfCells();
-    repose::Tets tets(nt, 4);
-    vtkNew<vtkIdList> ids;
-    for (vtkIdType c = 0; c < nt; ++c)
-    {
-      rest->GetCellPoints(c, ids);
-      if (ids->GetNumberOfIds() != 4)
-      {
-        vtkErrorMacro("cell " << c << " of the rest mesh is not a tetrahedron");
-        return 0;
-      }
-      for (int k = 0; k < 4; ++k)
-      {
-        tets(c, k) = static_cast<int>(ids->GetId(k));
-      }
-    }
-    std::vector<int> fixedBone(static_cast<std::size_t>(fixed->GetNumberOfTuples()));
-    for (vtkIdType v = 0; v < fixed->GetNumberOfTuples(); ++v)
-    {
-      fixedBone[static_cast<std::size_t>(v)] = static_cast<int>(fixed->GetTuple1(v));
-    }
-    const repose::Points restNodes = repose_vtk::ToPoints(rest->GetPoints());
+    repose::SparseWeights weights;
+    // The weights only for the segments (the linear model has no regions).
+    const bool segments = this->Model == MODEL_FIXED_COROTATED && this->VolumeRegions >= VOLUME_SEGMENTS;
+    const repose::RelaxationRestMesh restMesh = ToRestMesh(rest, fixed, segments, weights);
     repose::Points nodes = repose_vtk::ToPoints(posed->GetPoints());
-
-    repose::CorotationalOptions options;
-    options.poisson = this->PoissonRatio;
-    options.outerIterations = this->OuterIterations;
-    options.tolerance = this->Tolerance;
-    options.maxCgIterations = this->MaxIterations;
-    options.preconditioner = static_cast<repose::CorotationalOptions::Preconditioner>(this->Preconditioner);
-    options.model = static_cast<repose::CorotationalOptions::Model>(this->Model);
-    options.maxNewtonIterations = this->MaxNewtonIterations;
-    options.stepTolerance = this->StepTolerance;
-    options.energyTolerance = this->EnergyTolerance;
-    options.regionVolumeStiffness = this->RegionVolumeStiffness;
-    options.regionVolumeTolerance = this->RegionVolumeTolerance;
-    options.inversionBarrier = this->InversionBarrier;
-    options.untangleRelaxRings = this->UntangleRelaxRings;
-    options.strainedRegionThreshold = this->StrainedRegionThreshold;
-    options.strainedRegionRings = this->StrainedRegionRings;
-    options.continuation = static_cast<repose::CorotationalOptions::Continuation>(this->Continuation);
-    if (this->SkeletonJSON && *this->SkeletonJSON)
-    {
-      for (const repose::Joint& joint : repose::parseSkeletonJson(this->SkeletonJSON).joints)
-      {
-        options.boneParents.push_back(joint.parent);
-      }
-    }
-    // Segments need the rest mesh's weights; without them the whole body is one region. The linear
-    // model has no region terms: nothing is built for it.
-    const int volumeRegions = this->Model == MODEL_FIXED_COROTATED ? this->VolumeRegions : VOLUME_NONE;
-    if (volumeRegions >= VOLUME_SEGMENTS && repose_vtk::HasWeightArrays(rest->GetPointData()))
-    {
-      options.volumeRegions = repose::bodySegments(
-        repose_vtk::ToSparseWeights(rest->GetPointData(), rest->GetNumberOfPoints()), tets);
-      vtkDataArray* labels = rest->GetCellData()->GetArray(repose::arrays::kLabel);
-      if (volumeRegions == VOLUME_TISSUES && labels && labels->GetNumberOfTuples() == nt)
-      {
-        std::vector<int> tetLabels(static_cast<std::size_t>(nt));
-        for (vtkIdType c = 0; c < nt; ++c)
-        {
-          tetLabels[static_cast<std::size_t>(c)] = static_cast<int>(labels->GetTuple1(c));
-        }
-        // The fold-free continuation's path keeps the segments (see pathVolumeRegions).
-        options.pathVolumeRegions = options.volumeRegions;
-        options.volumeRegions = repose::tissueSegments(options.volumeRegions, tetLabels);
-      }
-    }
-    else if (volumeRegions != VOLUME_NONE)
-    {
-      options.volumeRegions.assign(static_cast<std::size_t>(nt), 0);
-    }
-    const vtkMTimeType restTime = rest->GetMTime();
-    if (this->WarmStart && this->Model == MODEL_FIXED_COROTATED && this->LastRestMTime == restTime &&
-      this->LastCorrection.size() == 3 * static_cast<std::size_t>(nodes.rows()))
-    {
-      options.startCorrection =
-        Eigen::Map<const repose::Points>(this->LastCorrection.data(), nodes.rows(), 3);
-    }
-    // Where the solve is, as VTK progress (the fraction is the continuation's path, 0 before it) and
-    // text; an observer may call Cancel() from its ProgressEvent.
-    auto pathStart = std::chrono::steady_clock::now();  // the continuation's, for its pace
-    bool onPath = false;
-    options.checkpoint = [this, &pathStart, &onPath](const repose::RelaxationProgress& p) {
-      std::string text;
-      switch (p.phase)
-      {
-        case repose::RelaxationProgress::Setup:
-          text = "FEM set-up";
-          break;
-        case repose::RelaxationProgress::Newton:
-          text = "Newton step " + std::to_string(p.newtonIterations + 1);
-          break;
-        case repose::RelaxationProgress::Untangling:
-          text = "untangling inverted tets";
-          break;
-        case repose::RelaxationProgress::Neighbourhood:
-          text = "relaxing untangled neighbourhoods";
-          break;
-        case repose::RelaxationProgress::StrainedRegion:
-          text = "relaxing the strained region";
-          break;
-        case repose::RelaxationProgress::Continuation:
-          if (!onPath)
-          {
-            onPath = true;
-            pathStart = std::chrono::steady_clock::now();
-          }
-          text = "fold-free continuation, step " + std::to_string(p.continuationSteps + 1) + ", " +
-            repose::fractionProgressLine("path", p.pathFraction,
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - pathStart).count());
-          break;
-        case repose::RelaxationProgress::Linear:
-          text = "linear solve " + std::to_string(p.outerIteration + 1);
-          break;
-      }
-      this->SetProgressText(text.c_str());
-      this->UpdateProgress(p.phase == repose::RelaxationProgress::Continuation ? p.pathFraction : 0.0);
-      return this->CancelRequested.load();
-    };
-    const repose::Points input = nodes;
     repose::CorotationalReport report;
-    this->LastCorrection.clear();  // a failed run leaves nothing to start from
-    repose::relaxCorotational(restNodes, tets, fixedBone, nodes, options, &report);
+    repose::relaxSkinnedMesh(restMesh, static_cast<repose::VolumeRegionChoice>(this->VolumeRegions),
+      Internals::Options(this), this->WarmStart, this->Internal->WarmStart, nodes, &report);
     this->CancelRequested = false;
-    this->SetProgressText(nullptr);  // the executive's own progress events carry none
-    this->LastCorrection.resize(3 * static_cast<std::size_t>(nodes.rows()));
-    Eigen::Map<repose::Points>(this->LastCorrection.data(), nodes.rows(), 3) = nodes - input;
-    this->LastRestMTime = restTime;
-    this->WarmStarted = report.correctedStart;
-
+    this->SetProgressText(nullptr); // the executive's own progress events carry none
+    Internals::StoreReport(this, report);
     output->ShallowCopy(posed);
-    vtkNew<vtkPoints> points;
-    points->SetDataType(posed->GetPoints()->GetDataType());
-    points->SetNumberOfPoints(nodes.rows());
-    for (vtkIdType v = 0; v < nodes.rows(); ++v)
-    {
-      points->SetPoint(v, nodes(v, 0), nodes(v, 1), nodes(v, 2));
-    }
-    output->SetPoints(points);
-    this->CGIterations = 0;
-    for (int it : report.cgIterations)
-    {
-      this->CGIterations += it;
-    }
-    this->NewtonIterations = report.newtonIterations;
-    this->RelativeResidual = report.relativeResidual.empty() ? 0.0 : report.relativeResidual.back();
-    this->InvertedBefore = report.invertedBefore;
-    this->InvertedAfter = report.invertedAfter;
-    this->InvertedRigidAfter = report.invertedRigid;
-    this->PinchedNodes = report.pinchedNodes;
-    this->PinchedShortfall = report.pinchedShortfall;
-    this->UntangledNodes = report.untangledNodes;
-    this->UntangleNewtonIterations = report.untangleNewtonIterations;
-    this->RegionVolumeUpdates = report.regionVolumeUpdates;
-    this->LastRelaxTime = report.seconds;
-    this->LastAssemblyTime = report.assemblySeconds;
-    this->LastSolveTime = report.solveSeconds;
-    this->LastUntangleTime = report.untangleSeconds;
-    this->ContinuationSteps = report.continuationSteps;
-    this->ContinuationUsed = report.continuationUsed;
-    this->LastContinuationTime = report.continuationSeconds;
-    this->StrainedRegionNodes = report.strainedRegionNodes;
-    this->StrainedRegionNewtonIterations = report.strainedRegionNewtonIterations;
-    this->LastStrainedRegionTime = report.strainedRegionSeconds;
+    output->SetPoints(repose_vtk::ToPoints(nodes, posed->GetPoints()->GetDataType()));
   }
   catch (const repose::RelaxationCancelled&)
   {
@@ -285,6 +257,21 @@ int vtkReposeCorotationalRelax::RequestData(
     return 0;
   }
   return 1;
+}
+
+int vtkReposeCorotationalRelax::GetNumberOfWords(const char* setting)
+{
+  return setting ? static_cast<int>(repose::relaxationWords(setting).size()) : 0;
+}
+
+const char* vtkReposeCorotationalRelax::GetWord(const char* setting, int i)
+{
+  return i >= 0 && i < GetNumberOfWords(setting) ? repose::relaxationWords(setting)[i].word : nullptr;
+}
+
+int vtkReposeCorotationalRelax::GetWordValue(const char* setting, const char* word)
+{
+  return setting && word ? repose::relaxationWordValue(setting, word) : -1;
 }
 
 void vtkReposeCorotationalRelax::Cancel()

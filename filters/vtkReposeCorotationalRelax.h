@@ -12,7 +12,6 @@
 #include "vtkUnstructuredGridAlgorithm.h"
 
 #include <atomic>
-#include <vector>
 
 class REPOSEFILTERS_EXPORT vtkReposeCorotationalRelax : public vtkUnstructuredGridAlgorithm
 {
@@ -143,6 +142,14 @@ public:
   vtkGetMacro(WarmStart, bool);
   vtkBooleanMacro(WarmStart, bool);
 
+  /// The words users type for a setting ("model", "volume" or "continuation": the CLI's
+  /// --relax-model, --relax-volume and --relax-continuation, a batch manifest's relax entries), in
+  /// the order messages list them, and the value each stands for (SetModel, SetVolumeRegions,
+  /// SetContinuation); GetWord: nullptr out of range; GetWordValue: -1 for another word.
+  static int GetNumberOfWords(const char* setting);
+  static const char* GetWord(const char* setting, int i);
+  static int GetWordValue(const char* setting, const char* word);
+
   void SetRestMeshConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
   void SetRestMeshData(vtkDataObject* mesh) { this->SetInputData(1, mesh); }
 
@@ -232,8 +239,6 @@ protected:
   char* SkeletonJSON = nullptr;
   bool WarmStart = false;
   bool WarmStarted = false;
-  std::vector<double> LastCorrection;  // last output - last input, 3 per node
-  vtkMTimeType LastRestMTime = 0;   // ... for this rest mesh
   int ContinuationSteps = 0;
   bool ContinuationUsed = false;
   std::atomic<bool> CancelRequested{ false };
@@ -255,6 +260,9 @@ protected:
   double LastRelaxTime = 0;
 
 private:
+  struct Internals; // the core's options and report, and the warm start kept between runs
+  Internals* Internal;
+
   vtkReposeCorotationalRelax(const vtkReposeCorotationalRelax&) = delete;
   void operator=(const vtkReposeCorotationalRelax&) = delete;
 };

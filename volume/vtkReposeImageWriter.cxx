@@ -4,20 +4,15 @@
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
-#include "vtkMatrix3x3.h"
 #include "vtkObjectFactory.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkSmartPointer.h"
 #include "vtkXMLImageDataWriter.h"
 
-#include "itkImage.h"
-#include "itkImageFileWriter.h"
-#include "itkMetaDataObject.h"
-#include "itkVector.h"
-#include "itkMetaImageIOFactory.h"
-#include "itkNiftiImageIOFactory.h"
-#include "itkNrrdImageIOFactory.h"
+#include "itkMacro.h"
+
+#include "ReposeItkImageWriting.h"
 
 #include "image_file_integrity.h"
 #include "nifti_description.h"
@@ -29,7 +24,6 @@
 #include <cerrno>
 #include <filesystem>
 #include <memory>
-#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -40,16 +34,6 @@ vtkStandardNewMacro(vtkReposeImageWriter);
 namespace
 {
 namespace fs = std::filesystem;
-
-void RegisterItkFactories()
-{
-  static std::once_flag once;
-  std::call_once(once, [] {
-    itk::NiftiImageIOFactory::RegisterOneFactory();
-    itk::NrrdImageIOFactory::RegisterOneFactory();
-    itk::MetaImageIOFactory::RegisterOneFactory();
-  });
-}
 
 bool EndsWith(const std::string& s, const std::string& suffix)
 {
@@ -90,72 +74,6 @@ void RequireCompleteData(const std::string& target, const std::string& written, 
   {
     repose::throwWriteFailure(target, written);
   }
-}
-
-// The version and `fields` as NRRD and MetaImage write them: key/value fields from the image's dictionary.
-itk::MetaDataDictionary HeaderNotes(const std::vector<std::pair<std::string, std::string>>& fields)
-{
-  itk::MetaDataDictionary notes;
-  itk::EncapsulateMetaData<std::string>(notes, vtkReposeVersion::GetKey(), vtkReposeVersion::GetVersion());
-  for (const auto& [key, value] : fields)
-  {
-    itk::EncapsulateMetaData<std::string>(notes, key, value);
-  }
-  return notes;
-}
-
-template <class T>
-void WriteWithItk(
-  vtkImageData* input, const std::string& fileName, bool compress, const itk::MetaDataDictionary& notes)
-{
-  using ImageType = itk::Image<T, 3>;
-  typename ImageType::Pointer image = ImageType::New();
-  int dims[3];
-  input->GetDimensions(dims);
-  typename ImageType::RegionType region;
-  typename ImageType::SpacingType spacing;
-  typename ImageType::PointType origin;
-  typename ImageType::DirectionType direction;
-  const double* o = input->GetOrigin();
-  const double* s = input->GetSpacing();
-  vtkMatrix3x3* d = input->GetDirectionMatrix();
-  int extent[6];
-  input->GetExtent(extent);
-  for (int a = 0; a < 3; ++a)
-  {
-    region.SetIndex(a, 0);
-    region.SetSize(a, static_cast<itk::SizeValueType>(dims[a]));
-    spacing[a] = s[a];
-    for (int b = 0; b < 3; ++b)
-    {
-      direction(a, b) = d->GetElement(a, b);
-    }
-  }
-  // A VTK extent not starting at 0 moves the first voxel: origin + D * diag(spacing) * extentStart.
-  for (int a = 0; a < 3; ++a)
-  {
-    double x = o[a];
-    for (int b = 0; b < 3; ++b)
-    {
-      x += d->GetElement(a, b) * s[b] * extent[2 * b];
-    }
-    origin[a] = x;
-  }
-  image->SetRegions(region);
-  image->SetSpacing(spacing);
-  image->SetOrigin(origin);
-  image->SetDirection(direction);
-  image->SetMetaDataDictionary(notes);
-  image->Allocate();
-  const T* src = static_cast<const T*>(input->GetPointData()->GetScalars()->GetVoidPointer(0));
-  std::copy(src, src + region.GetNumberOfPixels(), image->GetBufferPointer());
-
-  using WriterType = itk::ImageFileWriter<ImageType>;
-  typename WriterType::Pointer writer = WriterType::New();
-  writer->SetFileName(fileName);
-  writer->SetInput(image);
-  writer->SetUseCompression(compress);
-  writer->Update();
 }
 
 // VTK's XML image data (ParaView's .vti): origin, spacing and the direction matrix, zlib-compressed.
@@ -221,39 +139,123 @@ vtkSmartPointer<vtkImageData> WithSmallestIntegerType(vtkImageData* input)
   return narrowed;
 }
 
-void WriteByType(
-  vtkImageData* input, const std::string& fileName, bool compress, const itk::MetaDataDictionary& notes)
+/// What the file name's extension asks for.
+struct ImageFormat
 {
-  if (input->GetPointData()->GetScalars()->GetNumberOfComponents() == 3)
+  bool gzipNifti; // .nii.gz
+  bool nifti;     // .nii or .nii.gz
+  bool compress;  // .nii.gz, .nrrd, .mha, .mhd
+  bool pair;      // a header and its data file: .mhd, .nhdr
+  bool vti;
+};
+
+ImageFormat FormatOf(const std::string& target)
+{
+  ImageFormat f;
+  f.gzipNifti = EndsWith(target, ".nii.gz");
+  f.nifti = f.gzipNifti || EndsWith(target, ".nii");
+  // NRRD (gzip encoding) and MetaImage (zlib) compressed as .nii.gz is: a label volume shrinks
+  // tens of times. A detached .nhdr keeps raw data, which is why one asks for a detached header.
+  f.compress = f.gzipNifti || EndsWith(target, ".nrrd") || EndsWith(target, ".mha") || EndsWith(target, ".mhd");
+  f.pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
+  f.vti = EndsWith(target, ".vti");
+  return f;
+}
+
+/// The file is written into a temporary folder beside the target under the final name (a
+/// header+data pair's relative data-file reference stays valid), locked while this process writes
+/// it, then moved out.
+struct Staging
+{
+  fs::path dir;    // the target's folder
+  fs::path folder; // the temporary folder
+  fs::path file;   // the file in it
+  std::unique_ptr<repose::TemporaryLock> lock; // held until the folder is gone, removed on failure too
+};
+
+/// The staging of target, or the reason there is none.
+std::string Stage(const std::string& target, Staging& staging)
+{
+  const fs::path finalPath(target);
+  staging.dir = finalPath.parent_path().empty() ? fs::path(".") : finalPath.parent_path();
+  const std::string base = finalPath.filename().string();
+  const std::string tag = ".repose-tmp-" + std::to_string(::getpid()) + "-";
+  staging.folder = staging.dir / (tag + base + ".d");
+  staging.file = staging.folder / base;
+  std::error_code ec;
+  if (!fs::is_directory(staging.dir, ec))
   {
-    // A displacement field: ITK's vector image (NIfTI intent "vector", MetaImage 3 channels).
-    WriteWithItk<itk::Vector<float, 3>>(input, fileName, compress, notes);
-    return;
+    return "directory " + staging.dir.string() + " does not exist";
   }
-  switch (input->GetScalarType())
+  try
   {
-    case VTK_INT:
-      WriteWithItk<int>(input, fileName, compress, notes);
-      break;
-    case VTK_SHORT:
-      WriteWithItk<short>(input, fileName, compress, notes);
-      break;
-    case VTK_UNSIGNED_CHAR:
-      WriteWithItk<unsigned char>(input, fileName, compress, notes);
-      break;
-    case VTK_UNSIGNED_SHORT:
-      WriteWithItk<unsigned short>(input, fileName, compress, notes);
-      break;
-    case VTK_FLOAT:
-      WriteWithItk<float>(input, fileName, compress, notes);
-      break;
-    case VTK_DOUBLE:
-      WriteWithItk<double>(input, fileName, compress, notes);
-      break;
-    default:
-      throw std::runtime_error(std::string("unsupported scalar type ") + input->GetScalarTypeAsString() +
-        " (use int, short, unsigned short, unsigned char, float or double)");
+    staging.lock = std::make_unique<repose::TemporaryLock>(staging.folder.string(), true);
   }
+  catch (const std::exception& e)
+  {
+    return e.what(); // not ours to remove: another process writes it
+  }
+  return std::string();
+}
+
+/// The ITK formats. NIfTI's note is set after ITK writes it uncompressed (ITK 5.2 leaves descrip
+/// empty); ITK's NIfTI writer reports short writes on stderr only, so its size is checked first.
+void WriteItkStaged(vtkImageData* input, const std::string& target, const ImageFormat& format,
+  const Staging& staging, std::uintmax_t voxelBytes,
+  const std::vector<std::pair<std::string, std::string>>& fields, const std::string& what)
+{
+  const std::string base = staging.file.filename().string();
+  const fs::path itkFile = format.gzipNifti ? staging.folder / base.substr(0, base.size() - 3) : staging.file;
+  repose_vtk::WriteWithItk(input, itkFile.string(), format.compress && !format.gzipNifti, fields);
+  if (format.nifti)
+  {
+    if (DataBytes(itkFile) < voxelBytes + 352)
+    {
+      repose::throwWriteFailure(target, itkFile.string(), errno);
+    }
+    repose::describeNifti(target, itkFile.string(),
+      std::string("Repose ") + vtkReposeVersion::GetVersion() + " " + what,
+      format.gzipNifti ? staging.file.string() : "");
+  }
+}
+
+/// The staged file read back: there, whole (compressed streams inflate to all the voxels), ending
+/// as its format does. Throws repose::WriteFailure naming target otherwise.
+void VerifyStaged(const std::string& target, const ImageFormat& format, const Staging& staging,
+  std::uintmax_t voxelBytes)
+{
+  const std::string file = staging.file.string();
+  if (!fs::exists(staging.file))
+  {
+    repose::throwWriteFailure(target, file, errno);
+  }
+  if (format.gzipNifti)
+  {
+    repose::requireCompleteGzip(target, file, voxelBytes);
+  }
+  else if (format.compress)
+  {
+    RequireCompleteData(target, file, voxelBytes);
+  }
+  repose::requireWritten(target, format.pair ? staging.folder.string() : file, 1);
+  if (format.vti)
+  {
+    repose::requireEndsWith(target, file, "</VTKFile>\n");
+  }
+  else if (!format.compress && DataBytes(format.pair ? staging.folder : staging.file) < voxelBytes)
+  {
+    repose::throwWriteFailure(target, file);
+  }
+}
+
+/// The staged files moved to the target's folder, the temporary folder removed.
+void MoveOut(const Staging& staging)
+{
+  for (const auto& entry : fs::directory_iterator(staging.folder))
+  {
+    fs::rename(entry.path(), staging.dir / entry.path().filename());
+  }
+  fs::remove(staging.folder);
 }
 }
 
@@ -279,135 +281,72 @@ int vtkReposeImageWriter::RequestData(
 int vtkReposeImageWriter::WriteImage(vtkImageData* given)
 {
   const std::string target = this->FileName ? this->FileName : "";
-  auto fail = [this](const std::string& reason) { return this->Fail(reason); };
   if (target.empty())
   {
-    return fail("no file name set");
+    return this->Fail("no file name set");
   }
   if (!given || !given->GetPointData()->GetScalars() || given->GetNumberOfPoints() < 1)
   {
-    return fail("input has no image scalars");
+    return this->Fail("input has no image scalars");
   }
   const vtkSmartPointer<vtkImageData> input =
     this->SmallestIntegerType ? WithSmallestIntegerType(given) : vtkSmartPointer<vtkImageData>(given);
   const int components = input->GetPointData()->GetScalars()->GetNumberOfComponents();
   if (components != 1 && !(components == 3 && input->GetScalarType() == VTK_FLOAT))
   {
-    return fail("input scalars must have one component (or three floats: a vector field)");
+    return this->Fail("input scalars must have one component (or three floats: a vector field)");
   }
-  const bool gzipNifti = EndsWith(target, ".nii.gz");
-  // NRRD (gzip encoding) and MetaImage (zlib) compressed as .nii.gz is: a label volume shrinks
-  // tens of times. A detached .nhdr keeps raw data, which is why one asks for a detached header.
-  const bool compress =
-    gzipNifti || EndsWith(target, ".nrrd") || EndsWith(target, ".mha") || EndsWith(target, ".mhd");
-  const bool pair = EndsWith(target, ".mhd") || EndsWith(target, ".nhdr");
-  const bool vti = EndsWith(target, ".vti");
-  const bool nifti = gzipNifti || EndsWith(target, ".nii");
-  if (!(compress || pair || vti || EndsWith(target, ".nii")))
+  const ImageFormat format = FormatOf(target);
+  if (!(format.compress || format.pair || format.vti || format.nifti))
   {
-    return fail("unknown extension; use .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd or .vti");
+    return this->Fail("unknown extension; use .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd or .vti");
   }
-  RegisterItkFactories();
-
-  const fs::path finalPath(target);
-  fs::path dir = finalPath.parent_path();
-  if (dir.empty())
+  repose_vtk::RegisterItkImageFactories();
+  Staging staging;
+  const std::string notStaged = Stage(target, staging);
+  if (!notStaged.empty())
   {
-    dir = ".";
+    return this->Fail(notStaged);
   }
-  const std::string base = finalPath.filename().string();
-  const std::string tag = ".repose-tmp-" + std::to_string(::getpid()) + "-";
-  std::error_code ec;
-  // Written into a temporary folder under the final name (a header+data pair's relative data-file
-  // reference stays valid), locked while this process writes it, then moved out.
-  const fs::path tmpDir = dir / (tag + base + ".d");
-  const fs::path tmpFile = tmpDir / base;
-  if (!fs::is_directory(dir, ec))
-  {
-    return fail("directory " + dir.string() + " does not exist");
-  }
-  std::unique_ptr<repose::TemporaryLock> lock;  // held until the folder is gone, removed on failure too
-  try
-  {
-    lock = std::make_unique<repose::TemporaryLock>(tmpDir.string(), true);
-  }
-  catch (const std::exception& e)
-  {
-    return fail(e.what());  // not ours to remove: another process writes it
-  }
-  // ITK's NIfTI writer reports short writes on stderr only: the file is read back to its last byte.
   const std::uintmax_t voxelBytes = std::uintmax_t(input->GetNumberOfPoints()) *
     std::uintmax_t(input->GetScalarSize()) * std::uintmax_t(components);
+  std::error_code ec;
   try
   {
     errno = 0;
-    if (vti)
+    if (format.vti)
     {
-      WriteVti(input, tmpFile.string());
+      WriteVti(input, staging.file.string());
     }
     else
     {
-      // NIfTI's note is set after ITK writes it uncompressed (ITK 5.2 leaves descrip empty).
-      const fs::path itkFile = gzipNifti ? tmpDir / base.substr(0, base.size() - 3) : tmpFile;
-      WriteByType(input, itkFile.string(), compress && !gzipNifti, HeaderNotes(this->HeaderFields(input)));
-      if (nifti)
-      {
-        if (DataBytes(itkFile) < voxelBytes + 352)
-        {
-          repose::throwWriteFailure(target, itkFile.string(), errno);
-        }
-        const std::string what = this->Description ? this->Description
-          : components == 3                        ? "displacement field"
-          : this->SmallestIntegerType              ? "labels"
-                                                   : "image";
-        repose::describeNifti(target, itkFile.string(), std::string("Repose ") + vtkReposeVersion::GetVersion() +
-            " " + what, gzipNifti ? tmpFile.string() : "");
-      }
+      WriteItkStaged(input, target, format, staging, voxelBytes, this->HeaderFields(input),
+        this->Description ? this->Description
+          : components == 3 ? "displacement field"
+          : this->SmallestIntegerType ? "labels"
+                                      : "image");
     }
-    if (!fs::exists(tmpFile))
-    {
-      repose::throwWriteFailure(target, tmpFile.string(), errno);
-    }
-    if (gzipNifti)
-    {
-      repose::requireCompleteGzip(target, tmpFile.string(), voxelBytes);
-    }
-    else if (compress)
-    {
-      RequireCompleteData(target, tmpFile.string(), voxelBytes);
-    }
-    repose::requireWritten(target, pair ? tmpDir.string() : tmpFile.string(), 1);
-    if (vti)
-    {
-      repose::requireEndsWith(target, tmpFile.string(), "</VTKFile>\n");
-    }
-    else if (!compress && DataBytes(pair ? tmpDir : tmpFile) < voxelBytes)
-    {
-      repose::throwWriteFailure(target, tmpFile.string());
-    }
-    for (const auto& entry : fs::directory_iterator(tmpDir))
-    {
-      fs::rename(entry.path(), dir / entry.path().filename());
-    }
-    fs::remove(tmpDir);
+    VerifyStaged(target, format, staging, voxelBytes);
+    MoveOut(staging);
   }
   catch (const repose::WriteFailure& e)
   {
-    fs::remove_all(tmpDir, ec);
-    return fail(e.reason);
+    fs::remove_all(staging.folder, ec);
+    return this->Fail(e.reason);
   }
   catch (const itk::ExceptionObject& e)
   {
     // ITK's description runs over lines and names the temporary file: the cause, when known, says more.
     const int err = errno;
-    const std::string known = repose::knownWriteFailure(tmpFile.string(), repose::isStorageError(err) ? err : 0);
-    fs::remove_all(tmpDir, ec);
-    return fail(known.empty() ? e.GetDescription() : known);
+    const std::string known =
+      repose::knownWriteFailure(staging.file.string(), repose::isStorageError(err) ? err : 0);
+    fs::remove_all(staging.folder, ec);
+    return this->Fail(known.empty() ? e.GetDescription() : known);
   }
   catch (const std::exception& e)
   {
-    fs::remove_all(tmpDir, ec);
-    return fail(e.what());
+    fs::remove_all(staging.folder, ec);
+    return this->Fail(e.what());
   }
   return 1;
 }

@@ -66,6 +66,14 @@ struct vtkReposePosedVolume::Internals
   void UpdateFixedBone(vtkDataArray* fixed);
   // An int array of `voxels` tuples for the labels, the last pose's when it can be reused.
   vtkIntArray* LabelArray(vtkImageData* output, vtkIdType voxels);
+  // The rest side brought up to date (tets, nodes, grid, the values resampled, the fixed nodes);
+  // whether bones are kept rigid.
+  bool UpdateRest(vtkReposePosedVolume* self, vtkUnstructuredGrid* restMesh, const repose::ImageGrid& rest,
+    vtkDataArray* scalars, int kind);
+  // The posed grid's values (labels, intensities or displacements) over `voxels` voxels.
+  vtkSmartPointer<vtkDataArray> Resample(vtkReposePosedVolume* self, const repose::Points& posedNodes,
+    const repose::ImageGrid& outGrid, const repose::PullResampleOptions& options, vtkIdType voxels, int kind,
+    bool rigid, vtkImageData* output, repose::PullResampleReport& report);
 };
 
 namespace
@@ -112,6 +120,22 @@ repose::ImageGrid GridFromInfo(const int ext[6], const double origin[3], const d
 }
 
 // The requested sub-extent clamped to the full extent; throws if that is empty.
+/// The grid of an image: its extent, origin, spacing and direction matrix.
+repose::ImageGrid GridOfImage(vtkImageData* image)
+{
+  int ext[6];
+  image->GetExtent(ext);
+  double direction[9];
+  for (int a = 0; a < 3; ++a)
+  {
+    for (int b = 0; b < 3; ++b)
+    {
+      direction[3 * a + b] = image->GetDirectionMatrix()->GetElement(a, b);
+    }
+  }
+  return GridFromInfo(ext, image->GetOrigin(), image->GetSpacing(), direction);
+}
+
 std::array<int, 6> ClampedSubExtent(const int full[6], const int sub[6])
 {
   std::array<int, 6> e;
@@ -316,6 +340,56 @@ int vtkReposePosedVolume::RequestUpdateExtent(
   return 1;
 }
 
+bool vtkReposePosedVolume::Internals::UpdateRest(vtkReposePosedVolume* self, vtkUnstructuredGrid* restMesh,
+  const repose::ImageGrid& rest, vtkDataArray* scalars, int kind)
+{
+  // Rest-side conversions are cached: between poses only the posed nodes change.
+  this->UpdateTets(restMesh);
+  this->UpdateRestNodes(restMesh->GetPoints());
+  this->Cache.setRestGrid(rest);
+  if (!self->OutputDisplacement)
+  {
+    this->UpdateScalars(scalars, kind);
+  }
+  vtkDataArray* fixed = restMesh->GetPointData()->GetArray(repose::arrays::kFixedBone);
+  const bool rigid = self->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints();
+  if (rigid && kind == 0 && !self->OutputDisplacement)
+  {
+    this->UpdateFixedBone(fixed);
+  }
+  return rigid;
+}
+
+vtkSmartPointer<vtkDataArray> vtkReposePosedVolume::Internals::Resample(vtkReposePosedVolume* self,
+  const repose::Points& posedNodes, const repose::ImageGrid& outGrid, const repose::PullResampleOptions& options,
+  vtkIdType voxels, int kind, bool rigid, vtkImageData* output, repose::PullResampleReport& report)
+{
+  self->RigidBoneVoxels = 0;
+  self->ContestedBoneVoxels = 0;
+  if (self->OutputDisplacement)
+  {
+    auto array = vtkSmartPointer<vtkFloatArray>::New();
+    array->SetNumberOfComponents(3);
+    array->SetNumberOfTuples(voxels);
+    this->Cache.displacementInto(posedNodes, outGrid, options, array->GetPointer(0), &report);
+    return array;
+  }
+  if (kind == 0)
+  {
+    vtkIntArray* array = this->LabelArray(output, voxels);
+    const repose::RigidBoneCounts counts = this->Cache.labelsInto(posedNodes, outGrid, options,
+      array->GetPointer(0), static_cast<std::int32_t>(self->BackgroundValue), rigid, &report);
+    self->RigidBoneVoxels = static_cast<vtkIdType>(counts.changedVoxels);
+    self->ContestedBoneVoxels = static_cast<vtkIdType>(counts.contestedVoxels);
+    return array;
+  }
+  auto array = vtkSmartPointer<vtkFloatArray>::New();
+  array->SetNumberOfTuples(voxels);
+  this->Cache.intensitiesInto(posedNodes, outGrid, options, array->GetPointer(0),
+    static_cast<float>(self->BackgroundValue), &report);
+  return array;
+}
+
 int vtkReposePosedVolume::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
@@ -343,38 +417,14 @@ int vtkReposePosedVolume::RequestData(
         std::to_string(restMesh->GetNumberOfPoints()) + " vs " +
         std::to_string(posedMesh->GetNumberOfPoints()) + " nodes)");
     }
-    int ext[6];
-    image->GetExtent(ext);
-    double direction[9];
-    for (int a = 0; a < 3; ++a)
-    {
-      for (int b = 0; b < 3; ++b)
-      {
-        direction[3 * a + b] = image->GetDirectionMatrix()->GetElement(a, b);
-      }
-    }
-    const repose::ImageGrid rest = GridFromInfo(ext, image->GetOrigin(), image->GetSpacing(), direction);
-    // Rest-side conversions are cached: between poses only the posed nodes change.
-    Internals& in = *this->Internal;
-    in.UpdateTets(restMesh);
-    in.UpdateRestNodes(restMesh->GetPoints());
-    in.Cache.setRestGrid(rest);
+    const repose::ImageGrid rest = GridOfImage(image);
     const int kind = this->Interpolation == Nearest ? 0 : 1;
-    if (!this->OutputDisplacement)
-    {
-      in.UpdateScalars(scalars, kind);
-    }
-    vtkDataArray* fixed = restMesh->GetPointData()->GetArray(repose::arrays::kFixedBone);
-    const bool rigid = this->RigidBones && fixed && fixed->GetNumberOfTuples() == restMesh->GetNumberOfPoints();
-    if (rigid && kind == 0 && !this->OutputDisplacement)
-    {
-      in.UpdateFixedBone(fixed);
-    }
+    const bool rigid = this->Internal->UpdateRest(this, restMesh, rest, scalars, kind);
     const repose::Points posedNodes = repose_vtk::ToPoints(posedMesh->GetPoints());
     const repose::ImageGrid outGrid = repose::posedOutputGrid(
       rest, posedNodes, GridOptions(rest, this->PaddingVoxels, this->ExtrapolationDistance, this->MaxVoxels));
     int full[6];
-    double origin[3], spacing[3];
+    double origin[3], spacing[3], direction[9];
     GridToArrays(outGrid, full, origin, spacing, direction);
     std::copy(full, full + 6, this->FullOutputExtent);
     repose::PullResampleOptions options;
@@ -386,36 +436,9 @@ int vtkReposePosedVolume::RequestData(
       options.outputExtent = voi;
     }
     const vtkIdType voxels = static_cast<vtkIdType>(repose::extentGrid(outGrid, voi).voxelCount());
-
     repose::PullResampleReport report;
-    vtkSmartPointer<vtkDataArray> outScalars;
-    this->RigidBoneVoxels = 0;
-    this->ContestedBoneVoxels = 0;
-    if (this->OutputDisplacement)
-    {
-      auto array = vtkSmartPointer<vtkFloatArray>::New();
-      array->SetNumberOfComponents(3);
-      array->SetNumberOfTuples(voxels);
-      in.Cache.displacementInto(posedNodes, outGrid, options, array->GetPointer(0), &report);
-      outScalars = array;
-    }
-    else if (kind == 0)
-    {
-      vtkIntArray* array = in.LabelArray(output, voxels);
-      const repose::RigidBoneCounts counts = in.Cache.labelsInto(posedNodes, outGrid, options, array->GetPointer(0),
-        static_cast<std::int32_t>(this->BackgroundValue), rigid, &report);
-      this->RigidBoneVoxels = static_cast<vtkIdType>(counts.changedVoxels);
-      this->ContestedBoneVoxels = static_cast<vtkIdType>(counts.contestedVoxels);
-      outScalars = array;
-    }
-    else
-    {
-      auto array = vtkSmartPointer<vtkFloatArray>::New();
-      array->SetNumberOfTuples(voxels);
-      in.Cache.intensitiesInto(posedNodes, outGrid, options, array->GetPointer(0),
-        static_cast<float>(this->BackgroundValue), &report);
-      outScalars = array;
-    }
+    vtkSmartPointer<vtkDataArray> outScalars =
+      this->Internal->Resample(this, posedNodes, outGrid, options, voxels, kind, rigid, output, report);
     outScalars->SetName(this->OutputDisplacement ? repose::arrays::kDisplacement
         : scalars->GetName()                       ? scalars->GetName()
                                                    : repose::arrays::kImageScalars);

@@ -4,6 +4,8 @@ import json
 import os
 import re
 
+from repose import vtkReposeCorotationalRelax
+
 LABEL_FORMATS = (".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd")
 OUTPUTS = ("labels", "mesh", "surfaces", "image")
 # `repose prepare` options a subject may set, manifest key -> option.
@@ -12,8 +14,16 @@ PREPARE_OPTIONS = {"mesh_spacing": "--mesh-spacing", "quality": "--quality", "in
                    "max_gap": "--max-gap"}
 RELAX_DEFAULTS = {"model": "fixed-corotated", "volume": "segments", "continuation": "if-inverted",
                   "strained_region": "first", "poisson": 0.49, "iterations": 1}
-RELAX_CHOICES = {"model": ("fixed-corotated", "linear"), "volume": ("segments", "tissues", "body", "none"),
-                 "continuation": ("if-inverted", "never", "always"), "strained_region": ("first", "off")}
+
+
+def _relax_words(setting):
+    """The relaxation filter's words for a setting, as `repose pose --relax-*` takes them."""
+    relax = vtkReposeCorotationalRelax
+    return tuple(relax.GetWord(setting, i) for i in range(relax.GetNumberOfWords(setting)))
+
+
+RELAX_CHOICES = {"model": _relax_words("model"), "volume": _relax_words("volume"),
+                 "continuation": _relax_words("continuation"), "strained_region": ("first", "off")}
 SETTING_KEYS = ("prepare", "skinning", "relax", "outputs", "format")
 SUBJECT_KEYS = ("name", "labels", "image", "skeleton", "label_table", "poses", "clips") + SETTING_KEYS
 CLIP_KEYS = ("file", "name", "frames", "map", "mode", "reference_frame", "root_motion", "unit_mm")

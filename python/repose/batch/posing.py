@@ -15,15 +15,6 @@ from repose import (vtkReposeCorotationalRelax, vtkReposeDicomSeriesWriter, vtkR
 
 from .checked_files import WriteFailure, check_written, failure_reason, write_text
 
-# Settings words -> the relaxation filter's enums (the words of repose pose --relax-*).
-RELAX_MODEL = {"fixed-corotated": vtkReposeCorotationalRelax.MODEL_FIXED_COROTATED,
-               "linear": vtkReposeCorotationalRelax.MODEL_LINEAR}
-RELAX_VOLUME = {"tissues": vtkReposeCorotationalRelax.VOLUME_TISSUES,
-                "segments": vtkReposeCorotationalRelax.VOLUME_SEGMENTS,
-                "body": vtkReposeCorotationalRelax.VOLUME_BODY, "none": vtkReposeCorotationalRelax.VOLUME_NONE}
-RELAX_CONTINUATION = {"if-inverted": vtkReposeCorotationalRelax.CONTINUATION_IF_INVERTED,
-                      "never": vtkReposeCorotationalRelax.CONTINUATION_NEVER,
-                      "always": vtkReposeCorotationalRelax.CONTINUATION_ALWAYS}
 IMAGE_EXTENSIONS = (".nii.gz", ".nii", ".nrrd", ".nhdr", ".mha", ".mhd")
 
 
@@ -210,9 +201,10 @@ class CasePoser:
             f.SetWarmStart(False)  # every pose from its skinned shape, as `repose pose`
             f.SetPoissonRatio(relax["poisson"])
             f.SetOuterIterations(int(relax["iterations"]))
-            f.SetModel(RELAX_MODEL[relax["model"]])
-            f.SetVolumeRegions(RELAX_VOLUME[relax["volume"]])
-            f.SetContinuation(RELAX_CONTINUATION[relax["continuation"]])
+            # The manifest's words are the filter's own (checked against them in manifest.py).
+            f.SetModel(vtkReposeCorotationalRelax.GetWordValue("model", relax["model"]))
+            f.SetVolumeRegions(vtkReposeCorotationalRelax.GetWordValue("volume", relax["volume"]))
+            f.SetContinuation(vtkReposeCorotationalRelax.GetWordValue("continuation", relax["continuation"]))
             f.SetStrainedRegionThreshold(threshold if relax["strained_region"] == "first" else 0.0)
             self.source = f
         else:
