@@ -99,6 +99,8 @@ int vtkReposeBoneWeights::RequestData(
       options.boneCount = static_cast<int>(repose::parseSkeletonJson(this->SkeletonJSON).size());
     options.solver = this->Solver == SIMPLICIAL_LDLT ? repose::HarmonicSolver::EigenSimplicialLDLT
                                                      : repose::HarmonicSolver::CholmodSupernodal;
+    static_assert(int(repose::FillOrdering::CholmodDefault) == CHOLMOD_DEFAULT, "same order of values");
+    options.ordering = static_cast<repose::FillOrdering>(this->Ordering);
     repose::HarmonicWeightsReport report;
     const repose::SparseWeights weights = repose::harmonicWeights(mesh, options, &report);
 
@@ -123,12 +125,16 @@ int vtkReposeBoneWeights::RequestData(
     this->MaximumRawWeight = report.maxRawWeight;
     this->MaximumSumError = report.maxSumError;
     this->AssemblyTime = report.assembleSeconds;
+    this->AnalysisTime = report.analyzeSeconds;
+    this->FactorizationFlops = report.factorFlops;
+    this->FactorNonzeros = report.factorNonzeros;
     this->FactorizationTime = report.factorSeconds;
     this->SolveTime = report.solveSeconds;
     this->SelectionTime = report.selectSeconds;
     this->NumberOfFreeNodes = report.freeNodes;
     this->NumberOfFixedNodes = report.fixedNodes;
     this->SolverName = report.solver;
+    this->OrderingName = report.ordering;
   }
   catch (const std::exception& e)
   {
@@ -146,6 +152,7 @@ void vtkReposeBoneWeights::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfBones: " << this->NumberOfBones << "\n";
   os << indent << "SkeletonJSON: " << (this->SkeletonJSON ? "(set)" : "(none)") << "\n";
   os << indent << "Solver: " << (this->Solver == CHOLMOD ? "CHOLMOD" : "SimplicialLDLT") << "\n";
+  os << indent << "Ordering: " << this->Ordering << "\n";
   os << indent << "MinimumRawWeight: " << this->MinimumRawWeight << "\n";
   os << indent << "MaximumSumError: " << this->MaximumSumError << "\n";
   os << indent << "FactorizationTime: " << this->FactorizationTime << "\n";

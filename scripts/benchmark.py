@@ -5,10 +5,17 @@ the surfaces, pulling the posed volume, and pulling one axial slice of it as a v
 
 usage: PYTHONPATH=build/lib/python3/dist-packages /usr/bin/python3 scripts/benchmark.py [--sizes small,medium,large]
        [--scan NAME=LABELS[:SKELETON] ...] [--repose build/bin/repose] [--work DIR] [--poses N]
+       [--orderings N]
 A scan is prepared as `repose prepare --labels LABELS --skeleton SKELETON` (default: auto) with the
 default tet budget.
 Prints a Markdown table. Preprocessing is timed through the CLI (as a user runs it), posing through
-the Python-wrapped filters so that repeated poses reuse the loaded case as an interactive tool does."""
+the Python-wrapped filters so that repeated poses reuse the loaded case as an interactive tool does.
+The ratio columns set each posing stage against a plain peer measured in the same run by
+repose_stage_peers (built beside the CLI): skinning and moving the surfaces against STREAM's triad over
+the bytes each reads and writes once, the posed labels' CPU time against a one-thread gather of the rest
+labels through the same pose's ready displacement field.
+--orderings N adds a second table: the weights' sparse Cholesky (analysis, factorization, solve of every
+bone) with each fill-reducing ordering of vtkReposeBoneWeights, the fastest of N interleaved runs each."""
 import argparse
 import json
 import os
@@ -51,8 +58,51 @@ def stage_times(out):
     return {m.group(1): float(m.group(2)) for m in re.finditer(r"^\s+(\S[^\n]*?)\s+([0-9.]+) s$", out, re.M)}
 
 
-def pose_costs(case, poses):
-    """Loads a prepared case in the filters and times `poses` different poses."""
+def peers_exe(repose):
+    return os.path.join(os.path.dirname(repose), "repose_stage_peers")
+
+
+def image_affines(image):
+    """(index -> physical, physical -> index) of a vtkImageData, row-major 3x4 lists."""
+    import numpy as np
+    d = np.array([image.GetDirectionMatrix().GetElement(r, c) for r in range(3) for c in range(3)]).reshape(3, 3)
+    m = d @ np.diag(image.GetSpacing())
+    o = np.array(image.GetOrigin())
+    inv = np.linalg.inv(m)
+    return np.hstack([m, o[:, None]]).ravel().tolist(), np.hstack([inv, (-inv @ o)[:, None]]).ravel().tolist()
+
+
+def gather_peer(exe, labels, posed_field, work, repeats):
+    """CPU ms of a plain one-thread nearest-neighbour gather of `labels` through the ready displacement
+    field (repose_stage_peers gather), the output written once."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    rest = vtk_to_numpy(labels.GetPointData().GetScalars())
+    field = vtk_to_numpy(posed_field.GetPointData().GetArray("Displacement")).astype("float32")
+    rest.tofile(f"{work}/rest_labels.raw")
+    field.tofile(f"{work}/displacement.raw")
+    _, rest_to_index = image_affines(labels)
+    posed_to_physical, _ = image_affines(posed_field)
+    out = subprocess.run([exe, "gather", f"{work}/rest_labels.raw", str(rest.dtype.itemsize),
+                          *map(str, labels.GetDimensions()), *map(repr, rest_to_index), f"{work}/displacement.raw",
+                          *map(str, posed_field.GetDimensions()), *map(repr, posed_to_physical), str(repeats)],
+                         capture_output=True, text=True, check=True).stdout
+    return float(re.search(r"cpu_ms (\S+)", out).group(1))
+
+
+def triad_peer(exe, nbytes, repeats=20):
+    """Wall ms of STREAM's triad over `nbytes` on every hardware thread (repose_stage_peers triad)."""
+    out = subprocess.run([exe, "triad", str(int(nbytes)), str(repeats)], capture_output=True, text=True,
+                         check=True).stdout
+    return float(re.search(r"triad ms (\S+)", out).group(1))
+
+
+def array_bytes(*arrays):
+    return sum(a.GetNumberOfValues() * a.GetDataTypeSize() for a in arrays)
+
+
+def pose_costs(case, poses, repose=None, work=None):
+    """Loads a prepared case in the filters and times `poses` different poses; with `repose` (the CLI, beside
+    which repose_stage_peers is built) also the stages' peers, measured in the same run."""
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLUnstructuredGridReader
     from repose import (vtkReposeImageReader, vtkReposePosedVolume, vtkReposeSkinning,
                         vtkReposeSurfaceDeformer)
@@ -85,16 +135,16 @@ def pose_costs(case, poses):
     vs.SetInputConnection(2, sk.GetOutputPort())
     vs.SetInterpolationToNearest()
     vs.RestrictToSubExtentOn()
-    skin, surf, vol, sl, voxels = [], [], [], [], 0
+    skin, surf, vol, sl, skincpu, volcpu, voxels = [], [], [], [], [], [], 0
     for i in range(poses + 1):
         a = 10 + 50 * i / max(poses, 1)
         rotations = {"left_hip": {"axis": [1, 0, 0], "degrees": -a}, "left_knee": {"axis": [1, 0, 0], "degrees": a},
                      "right_shoulder": {"axis": [0, 1, 0], "degrees": a},
                      "right_elbow": {"axis": [1, 0, 0], "degrees": -a}}
         sk.SetPoseJSON(json.dumps({"rotations": {k: v for k, v in rotations.items() if k in joints}}))
-        t = time.perf_counter(); sk.Update(); t1 = time.perf_counter()
+        c0 = time.process_time(); t = time.perf_counter(); sk.Update(); t1 = time.perf_counter(); c1 = time.process_time()
         de.Update(); t2 = time.perf_counter()
-        vo.Update(); t3 = time.perf_counter()
+        c2 = time.process_time(); vo.Update(); t3 = time.perf_counter(); c3 = time.process_time()
         e = list(vo.GetFullOutputExtent())
         e[4] = e[5] = e[5] // 2
         vs.SetOutputSubExtent(e)
@@ -102,9 +152,70 @@ def pose_costs(case, poses):
         if i == 0:
             continue  # first pose pays one-off costs (weights conversion, binding cache)
         skin.append(t1 - t); surf.append(t2 - t1); vol.append(t3 - t2); sl.append(t5 - t4)
+        skincpu.append(c1 - c0); volcpu.append(c3 - c2)
         voxels = vo.GetOutput().GetNumberOfPoints()
     med = lambda v: sorted(v)[len(v) // 2]
-    return med(skin), med(surf), med(vol), med(sl), voxels, sr.GetOutput().GetNumberOfPoints()
+    costs = dict(skin=med(skin), surf=med(surf), vol=med(vol), slice=med(sl), skincpu=med(skincpu), volcpu=med(volcpu),
+                 voxels=voxels,
+                 surfverts=sr.GetOutput().GetNumberOfPoints())
+    if repose:
+        # The peers, on the last pose: the gather through that pose's displacement field, the triads over
+        # the bytes each stage reads and writes once (rest nodes, weights, bone ids and posed nodes; the
+        # surface's binding, the posed nodes and the moved points).
+        fo = vtkReposePosedVolume()
+        for port in range(3):
+            fo.SetInputConnection(port, vo.GetInputConnection(port, 0))
+        fo.OutputDisplacementOn()
+        fo.Update()
+        exe = peers_exe(repose)
+        costs["gather"] = gather_peer(exe, lr.GetOutput(), fo.GetOutput(), work, poses) / 1e3
+        rest, posed, surface = mr.GetOutput(), sk.GetOutput(), de.GetOutput()
+        costs["skin_triad"] = triad_peer(exe, array_bytes(
+            rest.GetPoints().GetData(), rest.GetPointData().GetArray("Weights"),
+            rest.GetPointData().GetArray("BoneIds"), posed.GetPoints().GetData())) / 1e3
+        costs["surf_triad"] = triad_peer(exe, array_bytes(
+            sr.GetOutput().GetPointData().GetArray("BoundTet"), sr.GetOutput().GetPointData().GetArray("BoundWeights"),
+            posed.GetPoints().GetData(), surface.GetPoints().GetData())) / 1e3
+    return costs
+
+
+ORDERINGS = ("AUTOMATIC", "AMD", "METIS", "CHOLMOD_DEFAULT")
+
+
+def ordering_costs(case, repeats):
+    """Weights of a prepared case per ordering: {ordering: (analysis s, factorization s, solve s, used, GFlop,
+    nnz(L), process CPU s of the whole filter)}, the fastest of `repeats` runs taken in turn (a change of load
+    then touches every ordering alike; the fastest is the one least disturbed by it)."""
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+    from repose import vtkReposeBoneWeights
+    mr = vtkXMLUnstructuredGridReader()
+    mr.SetFileName(f"{case}/mesh.vtu")
+    mr.Update()
+    skeleton = open(f"{case}/skeleton.json").read()
+    runs = {o: [] for o in ORDERINGS}
+    for _ in range(repeats):
+        for o in ORDERINGS:
+            w = vtkReposeBoneWeights()
+            w.SetInputData(mr.GetOutput())
+            w.SetSkeletonJSON(skeleton)
+            w.SetOrdering(getattr(vtkReposeBoneWeights, o))
+            c = time.process_time()
+            w.Update()
+            c = time.process_time() - c
+            runs[o].append((w.GetAnalysisTime(), w.GetFactorizationTime() - w.GetAnalysisTime(), w.GetSolveTime(),
+                            w.GetOrderingName(), w.GetFactorizationFlops() / 1e9, w.GetFactorNonzeros(), c))
+    return {o: min(v, key=lambda r: r[0] + r[1] + r[2]) for o, v in runs.items()}, w.GetNumberOfFreeNodes()
+
+
+def print_orderings(rows):
+    print("\n| case | free nodes | ordering | used | GFlop | nnz(L) M | analysis s | factorization s | solve s |"
+          " total s | vs fastest | filter CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, costs, free in rows:
+        fastest = min(sum(c[:3]) for c in costs.values())
+        for o, (a, f, s, used, gflop, lnz, cpu) in costs.items():
+            print(f"| {name} | {free} | {o.lower()} | {used} | {gflop:.1f} | {lnz / 1e6:.1f} | {a:.3f} | {f:.3f} |"
+                  f" {s:.3f} | {a + f + s:.3f} | {(a + f + s) / fastest:.2f} | {cpu:.2f} |")
 
 
 def image_dims(path):
@@ -123,9 +234,11 @@ def main():
     ap.add_argument("--repose", default=os.path.join(root, "build", "bin", "repose"))
     ap.add_argument("--work", default=None)
     ap.add_argument("--poses", type=int, default=5)
+    ap.add_argument("--orderings", type=int, default=0, metavar="N",
+                    help="also time the weights per fill-reducing ordering, fastest of N runs (0: not)")
     args = ap.parse_args()
     work = args.work or tempfile.mkdtemp(prefix="repose-bench-")
-    rows = []
+    rows, orderings = [], []
     cases = [(size, None) for size in args.sizes.split(",") if size]
     cases += [tuple(entry.split("=", 1)) for entry in args.scan]
     for name, scan in cases:
@@ -143,18 +256,26 @@ def main():
         nodes, tets = int(m.group(1)), int(m.group(2))
         dims = image_dims(f"{d}/case/labels.nii.gz")
         voxels = dims[0] * dims[1] * dims[2]
-        skin, surf, vol, sl, outvox, surfverts = pose_costs(f"{d}/case", args.poses)
-        rows.append((name, "x".join(map(str, dims)), voxels, nodes, tets, surfverts, st.get("mesh", 0),
-                     st.get("weights", 0), st.get("surfaces", 0), st.get("binding", 0), t_prep, mem, skin * 1e3,
-                     surf * 1e3, vol * 1e3, outvox / vol / 1e6, sl * 1e3))
+        c = pose_costs(f"{d}/case", args.poses, args.repose, d)
+        rows.append((name, "x".join(map(str, dims)), voxels, nodes, tets, c["surfverts"], st.get("mesh", 0),
+                     st.get("weights", 0), st.get("surfaces", 0), st.get("binding", 0), t_prep, mem, c["skin"] * 1e3,
+                     c["surf"] * 1e3, c["vol"] * 1e3, c["voxels"] / c["vol"] / 1e6, c["slice"] * 1e3,
+                     c["skin"] / c["skin_triad"], c["surf"] / c["surf_triad"], c["volcpu"] / c["gather"]))
+        if args.orderings > 0:
+            costs, free = ordering_costs(f"{d}/case", args.orderings)
+            orderings.append((name, costs, free))
         print(f"{name}: done", file=sys.stderr)
     print("| case | voxels | nodes | tets | surface verts | mesh s | weights s | surfaces s | binding s |"
           " prepare total s | prepare peak MiB | skin nodes ms | move surfaces ms | posed labels ms | Mvox/s |"
-          " posed slice ms |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          " posed slice ms | skin / triad | move / triad | posed labels CPU / gather CPU |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r[0]} | {r[1]} ({r[2] / 1e6:.1f} M) | {r[3]} | {r[4]} | {r[5]} | {r[6]:.1f} | {r[7]:.1f} | {r[8]:.1f} |"
-              f" {r[9]:.1f} | {r[10]:.1f} | {r[11]:.0f} | {r[12]:.1f} | {r[13]:.1f} | {r[14]:.0f} | {r[15]:.0f} | {r[16]:.1f} |")
+              f" {r[9]:.1f} | {r[10]:.1f} | {r[11]:.0f} | {r[12]:.1f} | {r[13]:.1f} | {r[14]:.0f} | {r[15]:.0f} | {r[16]:.1f} |"
+              f" {r[17]:.1f} | {r[18]:.1f} | {r[19]:.1f} |")
+
+    if orderings:
+        print_orderings(orderings)
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "fill_ordering.h"
 #include "sparse_weights.h"
 #include "tet_mesh.h"
 
@@ -11,7 +12,7 @@ namespace repose {
 
 /// Sparse Cholesky used for the free-free block (both factor once and solve every bone at once).
 enum class HarmonicSolver {
-  CholmodSupernodal,    ///< SuiteSparse CHOLMOD supernodal LLT, METIS ordering (BLAS-backed; fastest, default)
+  CholmodSupernodal,    ///< SuiteSparse CHOLMOD supernodal LLT (BLAS-backed; fastest, default)
   EigenSimplicialLDLT   ///< Eigen's SimplicialLDLT (no external dependency at run time)
 };
 
@@ -19,6 +20,7 @@ struct HarmonicWeightsOptions {
   int maxInfluences = 4;     ///< k largest weights kept per node
   int boneCount = 0;         ///< number of bones (joints); fixedBone values lie in [0, boneCount)
   HarmonicSolver solver = HarmonicSolver::CholmodSupernodal;
+  FillOrdering ordering = FillOrdering::Automatic;  ///< CHOLMOD's fill-reducing ordering
 };
 
 struct HarmonicWeightsReport {
@@ -28,8 +30,13 @@ struct HarmonicWeightsReport {
   int freeNodes = 0;
   int fixedNodes = 0;
   std::string solver;        ///< e.g. "CHOLMOD supernodal LLT"
+  std::string ordering;      ///< the fill-reducing ordering used, e.g. "AMD"
+  double factorFlops = 0;    ///< CHOLMOD's count for that ordering (0 for Eigen's solver)
+  double factorNonzeros = 0; ///< nnz(L), likewise
   double assembleSeconds = 0;  ///< stiffness matrix, free-free block and right-hand sides
-  double factorSeconds = 0, solveSeconds = 0;
+  double analyzeSeconds = 0;   ///< ordering and symbolic analysis
+  double factorSeconds = 0;    ///< analysis and numeric factorization
+  double solveSeconds = 0;     ///< every bone's right-hand side
   double selectSeconds = 0;    ///< top-k extraction and renormalisation
 };
 
