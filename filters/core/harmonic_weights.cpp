@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "blas_threads.h"
 #include "fill_ordering.h"
 #include "parallel_for.h"
 #include "tet_laplacian.h"
@@ -161,6 +162,10 @@ HarmonicSolution solveHarmonic(const TetMesh& mesh, const HarmonicWeightsOptions
 
   Eigen::MatrixXd X;
   if (nfree > 0) {
+    // BLAS on this thread only: the same bits on any machine, and no spinning BLAS threads that a
+    // busy core (another job, a batch worker beside this one) stalls (scripts/benchmark_busy_neighbour.py:
+    // two OpenBLAS threads made the small phantom's solve 8.6x slower beside one spinning process).
+    const SingleThreadedBlas blasOnThisThread;
     const auto analyzeStart = Clock::now();
     if (options.solver == HarmonicSolver::CholmodSupernodal) {
       report.solver = "CHOLMOD supernodal LLT";
