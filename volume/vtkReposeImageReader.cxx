@@ -1,5 +1,7 @@
 #include "vtkReposeImageReader.h"
 
+#include "ReposeItkImageWriting.h"  // RegisterItkImageFactories, shared with the writer
+
 #include "vtkDataArray.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
@@ -38,16 +40,6 @@ vtkStandardNewMacro(vtkReposeImageReader);
 
 namespace
 {
-void RegisterItkFactories()
-{
-  static std::once_flag once;
-  std::call_once(once, [] {
-    itk::NiftiImageIOFactory::RegisterOneFactory();
-    itk::NrrdImageIOFactory::RegisterOneFactory();
-    itk::MetaImageIOFactory::RegisterOneFactory();
-  });
-}
-
 struct Header
 {
   bool IsFloat = false;
@@ -338,7 +330,7 @@ int vtkReposeImageReader::RequestInformation(
     this->Fail("no file name set");
     return 0;
   }
-  RegisterItkFactories();
+  repose_vtk::RegisterItkImageFactories();
   this->DicomVolume = nullptr;
   try
   {
@@ -380,7 +372,7 @@ int vtkReposeImageReader::RequestData(
     this->Fail("no file name set");
     return 0;
   }
-  RegisterItkFactories();
+  repose_vtk::RegisterItkImageFactories();
   try
   {
     if (std::filesystem::is_directory(this->FileName))
