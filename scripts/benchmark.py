@@ -13,7 +13,12 @@ the Python-wrapped filters so that repeated poses reuse the loaded case as an in
 The ratio columns set each posing stage against a plain peer measured in the same run by
 repose_stage_peers (built beside the CLI): skinning and moving the surfaces against STREAM's triad over
 the bytes each reads and writes once, the posed labels' CPU time against a one-thread gather of the rest
-labels through the same pose's ready displacement field.
+labels through the same pose's ready displacement field, and the posed labels' wall time (and the
+gather's one-thread CPU) against their floor: the triad's time over the posed labels' bytes, written once.
+The posed CT (trilinear float intensities; a stand-in on the labels' grid: the labels cast to float) is
+set against a one-thread trilinear gather through the same field. The surfaces are also moved right
+after the posed labels, as an app showing both does: that pass has
+evicted their data from the caches.
 --orderings N adds a second table: the weights' sparse Cholesky (analysis, factorization, solve of every
 bone) with each fill-reducing ordering of vtkReposeBoneWeights, the fastest of N interleaved runs each."""
 import argparse
@@ -72,18 +77,19 @@ def image_affines(image):
     return np.hstack([m, o[:, None]]).ravel().tolist(), np.hstack([inv, (-inv @ o)[:, None]]).ravel().tolist()
 
 
-def gather_peer(exe, labels, posed_field, work, repeats):
-    """CPU ms of a plain one-thread nearest-neighbour gather of `labels` through the ready displacement
-    field (repose_stage_peers gather), the output written once."""
+def gather_peer(exe, image, posed_field, work, repeats, linear=False):
+    """CPU ms of a plain one-thread gather of `image` through the ready displacement field
+    (repose_stage_peers gather), the output written once: nearest-neighbour labels, or with `linear` trilinear
+    float intensities."""
     from vtkmodules.util.numpy_support import vtk_to_numpy
-    rest = vtk_to_numpy(labels.GetPointData().GetScalars())
+    rest = vtk_to_numpy(image.GetPointData().GetScalars())
     field = vtk_to_numpy(posed_field.GetPointData().GetArray("Displacement")).astype("float32")
     rest.tofile(f"{work}/rest_labels.raw")
     field.tofile(f"{work}/displacement.raw")
-    _, rest_to_index = image_affines(labels)
+    _, rest_to_index = image_affines(image)
     posed_to_physical, _ = image_affines(posed_field)
-    out = subprocess.run([exe, "gather", f"{work}/rest_labels.raw", str(rest.dtype.itemsize),
-                          *map(str, labels.GetDimensions()), *map(repr, rest_to_index), f"{work}/displacement.raw",
+    out = subprocess.run([exe, "gather", f"{work}/rest_labels.raw", "0" if linear else str(rest.dtype.itemsize),
+                          *map(str, image.GetDimensions()), *map(repr, rest_to_index), f"{work}/displacement.raw",
                           *map(str, posed_field.GetDimensions()), *map(repr, posed_to_physical), str(repeats)],
                          capture_output=True, text=True, check=True).stdout
     return float(re.search(r"cpu_ms (\S+)", out).group(1))
@@ -104,6 +110,9 @@ def pose_costs(case, poses, repose=None, work=None):
     """Loads a prepared case in the filters and times `poses` different poses; with `repose` (the CLI, beside
     which repose_stage_peers is built) also the stages' peers, measured in the same run."""
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLUnstructuredGridReader
+    from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkCommonExecutionModel import vtkTrivialProducer
     from repose import (vtkReposeImageReader, vtkReposePosedVolume, vtkReposeSkinning,
                         vtkReposeSurfaceDeformer)
     mr = vtkXMLUnstructuredGridReader()
@@ -123,19 +132,28 @@ def pose_costs(case, poses, repose=None, work=None):
     de = vtkReposeSurfaceDeformer()
     de.SetInputConnection(0, sr.GetOutputPort())
     de.SetInputConnection(1, sk.GetOutputPort())
-    vo = vtkReposePosedVolume()
-    vo.SetInputConnection(0, lr.GetOutputPort())
-    vo.SetInputConnection(1, mr.GetOutputPort())
-    vo.SetInputConnection(2, sk.GetOutputPort())
-    vo.SetInterpolationToNearest()
+
+    def posed_volume(image_port, linear=False):
+        v = vtkReposePosedVolume()
+        for port, source in enumerate((image_port, mr.GetOutputPort(), sk.GetOutputPort())):
+            v.SetInputConnection(port, source)
+        v.SetInterpolation(v.Linear if linear else v.Nearest)
+        return v
+
+    vo = posed_volume(lr.GetOutputPort())
     # One axial slice through the middle, as a viewer showing the posed labels would request it.
-    vs = vtkReposePosedVolume()
-    vs.SetInputConnection(0, lr.GetOutputPort())
-    vs.SetInputConnection(1, mr.GetOutputPort())
-    vs.SetInputConnection(2, sk.GetOutputPort())
-    vs.SetInterpolationToNearest()
+    vs = posed_volume(lr.GetOutputPort())
     vs.RestrictToSubExtentOn()
-    skin, surf, vol, sl, skincpu, volcpu, voxels = [], [], [], [], [], [], 0
+    # Posed intensities (trilinear, float) of a stand-in CT on the labels' grid: the labels as float (built
+    # by hand: VTK 9.1's vtkImageCast drops the direction matrix).
+    ct = vtkTrivialProducer()
+    ct_image = vtkImageData()
+    ct_image.CopyStructure(lr.GetOutput())
+    ct_image.GetPointData().SetScalars(numpy_to_vtk(vtk_to_numpy(lr.GetOutput().GetPointData().GetScalars())
+                                                    .astype("float32"), deep=1))
+    ct.SetOutput(ct_image)
+    vc = posed_volume(ct.GetOutputPort(), linear=True)
+    skin, surf, vol, sl, skincpu, volcpu, after, ctw, ctcpu, voxels = [], [], [], [], [], [], [], [], [], 0
     for i in range(poses + 1):
         a = 10 + 50 * i / max(poses, 1)
         rotations = {"left_hip": {"axis": [1, 0, 0], "degrees": -a}, "left_knee": {"axis": [1, 0, 0], "degrees": a},
@@ -149,14 +167,18 @@ def pose_costs(case, poses, repose=None, work=None):
         e[4] = e[5] = e[5] // 2
         vs.SetOutputSubExtent(e)
         t4 = time.perf_counter(); vs.Update(); t5 = time.perf_counter()
+        # The surfaces moved again right after the posed volume, whose pass has evicted them from the caches.
+        de.Modified(); t6 = time.perf_counter(); de.Update(); t7 = time.perf_counter()
+        c8 = time.process_time(); t8 = time.perf_counter(); vc.Update(); t9 = time.perf_counter(); c9 = time.process_time()
         if i == 0:
             continue  # first pose pays one-off costs (weights conversion, binding cache)
-        skin.append(t1 - t); surf.append(t2 - t1); vol.append(t3 - t2); sl.append(t5 - t4)
+        skin.append(t1 - t); surf.append(t2 - t1); vol.append(t3 - t2); sl.append(t5 - t4); after.append(t7 - t6)
+        ctw.append(t9 - t8); ctcpu.append(c9 - c8)
         skincpu.append(c1 - c0); volcpu.append(c3 - c2)
         voxels = vo.GetOutput().GetNumberOfPoints()
     med = lambda v: sorted(v)[len(v) // 2]
     costs = dict(skin=med(skin), surf=med(surf), vol=med(vol), slice=med(sl), skincpu=med(skincpu), volcpu=med(volcpu),
-                 voxels=voxels,
+                 surf_after_volume=med(after), ct=med(ctw), ctcpu=med(ctcpu), voxels=voxels,
                  surfverts=sr.GetOutput().GetNumberOfPoints())
     if repose:
         # The peers, on the last pose: the gather through that pose's displacement field, the triads over
@@ -169,6 +191,7 @@ def pose_costs(case, poses, repose=None, work=None):
         fo.Update()
         exe = peers_exe(repose)
         costs["gather"] = gather_peer(exe, lr.GetOutput(), fo.GetOutput(), work, poses) / 1e3
+        costs["gather_ct"] = gather_peer(exe, ct_image, fo.GetOutput(), work, poses, linear=True) / 1e3
         rest, posed, surface = mr.GetOutput(), sk.GetOutput(), de.GetOutput()
         costs["skin_triad"] = triad_peer(exe, array_bytes(
             rest.GetPoints().GetData(), rest.GetPointData().GetArray("Weights"),
@@ -176,6 +199,8 @@ def pose_costs(case, poses, repose=None, work=None):
         costs["surf_triad"] = triad_peer(exe, array_bytes(
             sr.GetOutput().GetPointData().GetArray("BoundTet"), sr.GetOutput().GetPointData().GetArray("BoundWeights"),
             posed.GetPoints().GetData(), surface.GetPoints().GetData())) / 1e3
+        # The posed labels' floor: their output written once, at the triad's bandwidth.
+        costs["vol_floor"] = triad_peer(exe, array_bytes(vo.GetOutput().GetPointData().GetScalars())) / 1e3
     return costs
 
 
@@ -260,19 +285,24 @@ def main():
         rows.append((name, "x".join(map(str, dims)), voxels, nodes, tets, c["surfverts"], st.get("mesh", 0),
                      st.get("weights", 0), st.get("surfaces", 0), st.get("binding", 0), t_prep, mem, c["skin"] * 1e3,
                      c["surf"] * 1e3, c["vol"] * 1e3, c["voxels"] / c["vol"] / 1e6, c["slice"] * 1e3,
-                     c["skin"] / c["skin_triad"], c["surf"] / c["surf_triad"], c["volcpu"] / c["gather"]))
+                     c["skin"] / c["skin_triad"], c["surf"] / c["surf_triad"], c["volcpu"] / c["gather"],
+                     c["surf_after_volume"] * 1e3, c["vol"] / c["vol_floor"], c["gather"] / c["vol_floor"],
+                     c["ct"] * 1e3, c["ctcpu"] / c["gather_ct"]))
         if args.orderings > 0:
             costs, free = ordering_costs(f"{d}/case", args.orderings)
             orderings.append((name, costs, free))
         print(f"{name}: done", file=sys.stderr)
     print("| case | voxels | nodes | tets | surface verts | mesh s | weights s | surfaces s | binding s |"
           " prepare total s | prepare peak MiB | skin nodes ms | move surfaces ms | posed labels ms | Mvox/s |"
-          " posed slice ms | skin / triad | move / triad | posed labels CPU / gather CPU |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          " posed slice ms | skin / triad | move / triad | posed labels CPU / gather CPU |"
+          " move surfaces after posed labels ms | posed labels / floor | gather CPU / floor | posed CT ms |"
+          " posed CT CPU / trilinear gather CPU |")
+    print("|---" * 24 + "|")
     for r in rows:
         print(f"| {r[0]} | {r[1]} ({r[2] / 1e6:.1f} M) | {r[3]} | {r[4]} | {r[5]} | {r[6]:.1f} | {r[7]:.1f} | {r[8]:.1f} |"
               f" {r[9]:.1f} | {r[10]:.1f} | {r[11]:.0f} | {r[12]:.1f} | {r[13]:.1f} | {r[14]:.0f} | {r[15]:.0f} | {r[16]:.1f} |"
-              f" {r[17]:.1f} | {r[18]:.1f} | {r[19]:.1f} |")
+              f" {r[17]:.1f} | {r[18]:.1f} | {r[19]:.1f} | {r[20]:.1f} | {r[21]:.1f} | {r[22]:.1f} |"
+              f" {r[23]:.0f} | {r[24]:.1f} |")
 
     if orderings:
         print_orderings(orderings)

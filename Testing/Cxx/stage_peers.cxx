@@ -8,6 +8,8 @@
 //   REST_TO_INDEX maps a physical point to continuous rest indices, POSED_TO_PHYSICAL posed indices to
 //   physical points. One thread. Prints "gather cpu_ms MS checksum C" (MS: the fastest of REPEATS
 //   runs, in process CPU time; C: the sum of the labels written, so the work cannot be skipped).
+//   BYTES_PER_LABEL 0: the rest volume is float intensities, sampled trilinearly (the posed CT's peer;
+//   samples outside the rest grid's centres are 0), the checksum their rounded sum.
 //        repose_stage_peers triad BYTES REPEATS
 //   STREAM's triad a = b + s c on doubles, the three arrays BYTES together, split over every hardware
 //   thread (the memory bandwidth a stage moving BYTES cannot beat). Prints "triad ms MS" (fastest run).
@@ -44,9 +46,11 @@ std::vector<char> readAll(const char* path) {
   return data;
 }
 
-template <class Label>
-double gather(const Label* rest, const long* rd, const double* toIndex, const float* field, const long* pd,
-              const double* toPhysical, std::vector<Label>& out, long long& checksum) {
+// Calls out[n] = sample(q) for every posed voxel n, q its continuous rest index through the field, and
+// returns the CPU ms it took; then the checksum of what was written.
+template <class Value, class Sample>
+double gatherWith(const double* toIndex, const float* field, const long* pd, const double* toPhysical,
+                  std::vector<Value>& out, long long& checksum, Sample&& sample) {
   const double t0 = cpuMilliseconds();
   std::size_t n = 0;
   for (long k = 0; k < pd[2]; ++k)
@@ -57,15 +61,37 @@ double gather(const Label* rest, const long* rd, const double* toIndex, const fl
           p[r] = toPhysical[4 * r] * i + toPhysical[4 * r + 1] * j + toPhysical[4 * r + 2] * k + toPhysical[4 * r + 3] +
                  field[3 * n + r];
         for (int r = 0; r < 3; ++r)
-          q[r] = std::floor(toIndex[4 * r] * p[0] + toIndex[4 * r + 1] * p[1] + toIndex[4 * r + 2] * p[2] +
-                            toIndex[4 * r + 3] + 0.5);
-        const bool inside = q[0] >= 0 && q[1] >= 0 && q[2] >= 0 && q[0] < rd[0] && q[1] < rd[1] && q[2] < rd[2];
-        out[n] = inside ? rest[(long(q[2]) * rd[1] + long(q[1])) * rd[0] + long(q[0])] : Label(0);
+          q[r] = toIndex[4 * r] * p[0] + toIndex[4 * r + 1] * p[1] + toIndex[4 * r + 2] * p[2] + toIndex[4 * r + 3];
+        out[n] = sample(q);
       }
   const double ms = cpuMilliseconds() - t0;
-  checksum = 0;
-  for (const Label v : out) checksum += v;
+  double sum = 0;
+  for (const Value v : out) sum += double(v);
+  checksum = std::llround(sum);
   return ms;
+}
+
+template <class Label>
+double gather(const Label* rest, const long* rd, const double* toIndex, const float* field, const long* pd,
+              const double* toPhysical, std::vector<Label>& out, long long& checksum) {
+  return gatherWith(toIndex, field, pd, toPhysical, out, checksum, [&](const double* q) {
+    const double f[3] = {std::floor(q[0] + 0.5), std::floor(q[1] + 0.5), std::floor(q[2] + 0.5)};
+    const bool inside = f[0] >= 0 && f[1] >= 0 && f[2] >= 0 && f[0] < rd[0] && f[1] < rd[1] && f[2] < rd[2];
+    return inside ? rest[(long(f[2]) * rd[1] + long(f[1])) * rd[0] + long(f[0])] : Label(0);
+  });
+}
+
+// Trilinear intensity at rest index q (continuous); 0 unless the 8 neighbours are inside the grid.
+inline float trilinear(const float* rest, const long* rd, const double* q) {
+  const double f[3] = {std::floor(q[0]), std::floor(q[1]), std::floor(q[2])};
+  if (f[0] < 0 || f[1] < 0 || f[2] < 0 || f[0] + 1 >= rd[0] || f[1] + 1 >= rd[1] || f[2] + 1 >= rd[2]) return 0.0f;
+  const double t[3] = {q[0] - f[0], q[1] - f[1], q[2] - f[2]};
+  const float* c = rest + (long(f[2]) * rd[1] + long(f[1])) * rd[0] + long(f[0]);
+  const long sy = rd[0], sz = rd[0] * rd[1];
+  const double x00 = c[0] + t[0] * (c[1] - c[0]), x10 = c[sy] + t[0] * (c[sy + 1] - c[sy]);
+  const double x01 = c[sz] + t[0] * (c[sz + 1] - c[sz]), x11 = c[sz + sy] + t[0] * (c[sz + sy + 1] - c[sz + sy]);
+  const double y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
+  return float(y0 + t[2] * (y1 - y0));
 }
 
 int gatherMain(char** a) {
@@ -80,7 +106,8 @@ int gatherMain(char** a) {
   for (int i = 0; i < 12; ++i) toPhysical[i] = std::atof(a[21 + i]);
   const int repeats = std::max(1, std::atoi(a[33]));
   const std::size_t voxels = std::size_t(pd[0] * pd[1] * pd[2]);
-  if (fieldData.size() != voxels * 3 * sizeof(float) || labels.size() != std::size_t(rd[0] * rd[1] * rd[2] * bytes)) {
+  const std::size_t restBytes = std::size_t(rd[0] * rd[1] * rd[2]) * (bytes == 0 ? sizeof(float) : std::size_t(bytes));
+  if (fieldData.size() != voxels * 3 * sizeof(float) || labels.size() != restBytes) {
     std::fprintf(stderr, "repose_stage_peers: the files do not match the dimensions\n");
     return 1;
   }
@@ -88,7 +115,12 @@ int gatherMain(char** a) {
   double best = 1e300;
   long long checksum = 0;
   for (int r = 0; r < repeats; ++r) {
-    if (bytes == 1) {
+    if (bytes == 0) {
+      std::vector<float> out(voxels);
+      const auto* rest = reinterpret_cast<const float*>(labels.data());
+      best = std::min(best, gatherWith(toIndex, field, pd, toPhysical, out, checksum,
+                                       [&](const double* q) { return trilinear(rest, rd, q); }));
+    } else if (bytes == 1) {
       std::vector<std::uint8_t> out(voxels);
       best = std::min(best, gather(reinterpret_cast<const std::uint8_t*>(labels.data()), rd, toIndex, field, pd,
                                    toPhysical, out, checksum));
