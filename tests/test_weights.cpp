@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <numeric>
 #include <random>
@@ -94,6 +95,30 @@ TEST(TetLaplacian, RowsSumToZeroSymmetricPSD) {
   const Eigen::VectorXd Kx = K * m.nodes.col(0);
   const int interior = 1 + 4 * (1 + 3 * 1);  // node (1,1,1) of a 4x3x3-node grid
   EXPECT_NEAR(Kx(interior), 0.0, 1e-12);
+}
+
+// Assembled in place, K holds the bits of the triplet-list assembly it replaced: the same pattern
+// (every node pair sharing a tet, rows sorted) and each entry the sum of its tets' terms in tet order.
+TEST(TetLaplacian, SameBitsAsTripletAssembly) {
+  const TetMesh m = gridMesh(5, 4, 3, 1.3, 0.3, 11);
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (Eigen::Index t = 0; t < m.tets.rows(); ++t) {
+    repose::Tets one(1, 4);
+    one << 0, 1, 2, 3;
+    repose::Points corners(4, 3);
+    for (int c = 0; c < 4; ++c) corners.row(c) = m.nodes.row(m.tets(t, c));
+    const Eigen::MatrixXd Ke = dense(repose::tetStiffnessMatrix(corners, one));
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) triplets.emplace_back(m.tets(t, a), m.tets(t, b), Ke(a, b));
+  }
+  Eigen::SparseMatrix<double> reference(m.nodes.rows(), m.nodes.rows());
+  reference.setFromTriplets(triplets.begin(), triplets.end());
+  const Eigen::SparseMatrix<double> K = repose::tetStiffnessMatrix(m.nodes, m.tets);
+  ASSERT_TRUE(K.isCompressed());
+  ASSERT_EQ(K.nonZeros(), reference.nonZeros());
+  EXPECT_TRUE(std::equal(K.outerIndexPtr(), K.outerIndexPtr() + K.cols() + 1, reference.outerIndexPtr()));
+  EXPECT_TRUE(std::equal(K.innerIndexPtr(), K.innerIndexPtr() + K.nonZeros(), reference.innerIndexPtr()));
+  EXPECT_EQ(std::memcmp(K.valuePtr(), reference.valuePtr(), sizeof(double) * std::size_t(K.nonZeros())), 0);
 }
 
 TEST(TetLaplacian, BadInputThrows) {

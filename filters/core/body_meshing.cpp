@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "freed_heap.h"
 #include "mesh_budget.h"
 #include "mesh_ordering.h"
 #include "mesh_tagging.h"
@@ -68,6 +69,9 @@ TetMesh meshOnce(const LabelVolume& labels, const IntensityVolume* intensity, co
   out.seedPoints = std::size_t(seeds.rows());
   report << "bone seeds: " << seeds.rows() << " (steps " << steps.surface << "/" << steps.interior << " voxels, "
          << secondsSince(t) << " s)\n";
+  // The scan-grid masks are done with (the surface comes from the meshing grid's): not beside TetGen.
+  meshing.body = MaskVolume();
+  meshing.peeled = MaskVolume();
 
   auto meshSurface = [&](double reduction) {
     const auto ts = Clock::now();
@@ -83,7 +87,9 @@ TetMesh meshOnce(const LabelVolume& labels, const IntensityVolume* intensity, co
     if (meshing.spacing.predictedTets > 0)
       text << " into about " << std::lround(meshing.spacing.predictedTets / 1e3) << " k tets";
     if (progress) progress(text.str());
-    return tetrahedralizeSurface(V, F, seeds, options.tets, &tetReport);
+    TetMesh mesh = tetrahedralizeSurface(V, F, seeds, options.tets, &tetReport);
+    releaseFreedHeap();  // TetGen's pools, before the next stage allocates
+    return mesh;
   };
   // A decimated surface may self-intersect in a narrow gap: TetGen refuses it, the full one is used.
   try {

@@ -55,6 +55,104 @@ void checkClosedSurface(const Triangles& F) {
                                 " edges shared by more than two triangles)");
 }
 
+// The facet -> vertices map TetGen's refinement reads (idx2facetlist, facetverticeslist), made as
+// tetgenmesh::makefacetverticesmap() makes it (same facet indices, same vertices in the same order)
+// but into one flat array. TetGen's own keeps every facet's vertices in an arraypool of its own
+// until all are found: 3 KiB per facet, and each surface triangle is a facet, so 0.4 GB at once on
+// a 128 k-triangle body surface, 0.85 GB on 291 k: the peak of the whole preprocessing.
+void buildFacetVerticesMap(tetgenmesh& m) {
+  using Point = tetgenmesh::point;
+  std::vector<int> firstVertex{0};
+  std::vector<Point> vertices;
+  auto addVertex = [&](Point p) {
+    const auto type = m.pointtype(p);
+    if (type == tetgenmesh::FREESEGVERTEX || type == tetgenmesh::FREEFACETVERTEX) return;
+    m.pinfect(p);
+    vertices.push_back(p);
+  };
+  tetgenmesh::face subface, neighbour, *member, *added;
+  m.subfaces->traversalinit();
+  for (subface.sh = m.shellfacetraverse(m.subfaces); subface.sh; subface.sh = m.shellfacetraverse(m.subfaces)) {
+    if (m.sinfected(subface)) continue;  // its facet is done
+    // A new facet: flood its subfaces across the edges that are not segments.
+    const auto corners = reinterpret_cast<Point*>(&subface.sh[3]);
+    for (int k = 0; k < 3; ++k) addVertex(corners[k]);
+    m.sinfect(subface);
+    m.caveshlist->newindex(reinterpret_cast<void**>(&member));
+    *member = subface;
+    for (long i = 0; i < m.caveshlist->objects; ++i) {
+      member = static_cast<tetgenmesh::face*>(fastlookup(m.caveshlist, i));
+      m.setfacetindex(*member, int(firstVertex.size()) - 1);
+      for (int j = 0; j < 3; ++j, m.senextself(*member)) {
+        if (isshsubseg(*member)) continue;
+        m.spivot(*member, neighbour);
+        if (m.sinfected(neighbour)) continue;
+        if (!m.pinfected(m.sapex(neighbour))) addVertex(m.sapex(neighbour));
+        m.sinfect(neighbour);
+        m.caveshlist->newindex(reinterpret_cast<void**>(&added));
+        *added = neighbour;
+      }
+    }
+    for (auto v = vertices.begin() + firstVertex.back(); v != vertices.end(); ++v) m.puninfect(*v);
+    m.caveshlist->restart();
+    firstVertex.push_back(int(vertices.size()));
+  }
+  m.subfaces->traversalinit();
+  for (subface.sh = m.shellfacetraverse(m.subfaces); subface.sh; subface.sh = m.shellfacetraverse(m.subfaces))
+    m.suninfect(subface);
+  m.idx2facetlist = new int[firstVertex.size()];
+  std::copy(firstVertex.begin(), firstVertex.end(), m.idx2facetlist);
+  m.facetverticeslist = new Point[vertices.size()];
+  std::copy(vertices.begin(), vertices.end(), m.facetverticeslist);
+  m.totalworkmemory += firstVertex.size() * sizeof(int) + vertices.size() * sizeof(Point);
+}
+
+// Queues every item of `items` into a new pool of bad ones and repairs them (chkencflag as TetGen's).
+void repairAll(tetgenmesh& m, tetgenmesh::memorypool* items, tetgenmesh::memorypool*& bad, int chkencflag) {
+  bad = new tetgenmesh::memorypool(sizeof(tetgenmesh::face), m.b->shellfaceperblock, sizeof(void*), 0);
+  tetgenmesh::face item;
+  items->traversalinit();
+  for (item.sh = m.shellfacetraverse(items); item.sh; item.sh = m.shellfacetraverse(items)) m.enqueuesubface(bad, &item);
+  if (chkencflag == 1) m.repairencsegs(chkencflag);
+  else m.repairencfacs(chkencflag);
+}
+
+// tetgenmesh::delaunayrefinement() with the facet map of buildFacetVerticesMap: encroached segments
+// and subfaces (without -Y), then bad tets, in TetGen's order, so the mesh is the same to the bit.
+// Without -S (not used here) there is no limit on the Steiner points to check first.
+void refineMesh(tetgenmesh& m) {
+  tetgenbehavior& b = *m.b;
+  if (m.useinsertradius) {
+    if ((b.plc && b.nobisect) || b.refine) m.makesegmentendpointsmap();
+    buildFacetVerticesMap(m);
+  }
+  m.steinerleft = b.steinerleft;
+  m.encseglist = new tetgenmesh::arraypool(sizeof(tetgenmesh::face), 8);
+  m.encshlist = new tetgenmesh::arraypool(sizeof(tetgenmesh::badface), 8);
+  const bool splitBoundary = !b.nobisect || m.checkconstraints;
+  if (splitBoundary) {
+    repairAll(m, m.subsegs, m.badsubsegs, 1);
+    if (b.reflevel > 1) repairAll(m, m.subfaces, m.badsubfacs, 2);
+  }
+  if (b.reflevel > 2) {
+    m.cosmindihed = std::cos(b.mindihedral / 180.0 * tetgenmesh::PI);
+    m.badtetrahedrons = new tetgenmesh::memorypool(sizeof(tetgenmesh::triface), b.tetrahedraperblock, sizeof(void*), 0);
+    tetgenmesh::triface tet;
+    m.tetrahedrons->traversalinit();
+    for (tet.tet = m.tetrahedrontraverse(); tet.tet; tet.tet = m.tetrahedrontraverse()) m.enqueuetetrahedron(&tet);
+    m.repairbadtets(4);
+  }
+  delete m.encseglist;
+  delete m.encshlist;
+  m.encseglist = m.encshlist = nullptr;
+  if (splitBoundary) {
+    delete m.badsubsegs;
+    if (b.reflevel > 1) delete m.badsubfacs;
+  }
+  if (b.reflevel > 2) delete m.badtetrahedrons;
+  m.badsubsegs = m.badsubfacs = m.badtetrahedrons = nullptr;
+}
+
 // TetGen 1.5.0's tetrahedralize() crashes when it reports an error: terminatetetgen() frees the mesh
 // and throws, then the destructor of its stack mesh frees it again. So the stages we use (-p, -q, -Y;
 // no -r/-m/-R) are driven here with a heap mesh, leaked on error (its pools are already freed then).
@@ -67,6 +165,7 @@ void checkClosedSurface(const Triangles& F) {
 // leaves useinsertradius off and a split segment would not inherit its segment index; the constrained
 // Delaunay stage run here does split segments and then reads that index (uninitialised: wrong Steiner
 // points or a crash). Setting it first gives the pools the layout and bookkeeping of the -p path.
+// The refinement is driven here too (refineMesh): see buildFacetVerticesMap.
 void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
   auto* m = new tetgenmesh();
   try {
@@ -81,7 +180,7 @@ void runTetGen(tetgenbehavior& b, tetgenio& in, tetgenio& out) {
     m->meshsurface();
     m->constraineddelaunay(stamp);
     m->carveholes();
-    if (b.quality) m->delaunayrefinement();
+    if (b.quality) refineMesh(*m);
     if (b.optlevel > 0) m->optimizemesh();
     if (!b.nojettison && (m->dupverts > 0 || m->unuverts > 0)) m->jettisonnodes();
     out.firstnumber = in.firstnumber;
