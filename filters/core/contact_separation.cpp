@@ -196,8 +196,8 @@ struct ContactCutPass {
   // Segments: the nearest bone of every body voxel, then moved at each contact.
   const NearestBones nb = nearestBones(body, bone);
   std::vector<std::int16_t> seg = nb.first;
-  std::map<Pair, std::size_t> contactIndex;  // the pair's contact in report.contacts
-  ContactSeparationReport report;
+  std::map<Pair, std::size_t> contactIndex{};  // the pair's contact in report.contacts
+  ContactSeparationReport report{};
 
   ContactSeparationReport run();
   void findContacts();
